@@ -1,0 +1,71 @@
+// The baked level as the runtime sees it: probes with SH radiance, their tetrahedralization, and the data
+// needed to locate a point. Read from and written to one binary `.tpb` file (format: docs/level_format.md).
+// Permissive: standard library and GLM only.
+//
+// Frames and units: world space is the input level's frame (right-handed, metres after the scene's unit
+// scale). To keep float precision far from the world origin, every stored position is relative to
+// `origin` (double): world = origin + local.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/runtime/sh.h"
+
+namespace tetraprobe {
+
+// What light the probes hold (bit flags, stored in the file).
+enum ProbeContent : uint32_t {
+  kContentEmissive = 1u << 0,     // light arriving directly from emissive surfaces
+  kContentSky = 1u << 1,          // light arriving directly from the sky
+  kContentIndirect = 1u << 2,     // light after one or more diffuse bounces
+  kContentDirectPunctual = 1u << 3,  // light arriving directly from point, spot and directional lights
+  kContentDefault = kContentEmissive | kContentSky | kContentIndirect,
+  kContentAll = kContentDefault | kContentDirectPunctual,
+};
+
+// One tetrahedron, laid out exactly as the GPU reads it (std430, 80 bytes; mirrored in
+// shaders/tetraprobe_layout.glsl).
+// - v[i]: probe indices. n[i]: the tet across the face opposite v[i], or -1 on the hull.
+// - Barycentrics of a local-space point X: w_i = dot(row[i].xyz, X) + row[i].w for i = 0..2, w_3 = 1 - sum.
+//   (row = inverse of [P0-P3 | P1-P3 | P2-P3], with row[i].w = -(M P3)_i folded in.)
+struct alignas(16) Tet {
+  int32_t v[4];
+  int32_t n[4];
+  float row[3][4];
+};
+static_assert(sizeof(Tet) == 80, "Tet is 80 bytes in std430");
+
+struct Level {
+  uint32_t content = kContentDefault;  // ProbeContent flags
+  uint32_t shOrder = 2;                // 1 or 2 (L1 probes have coefficients 4..8 zero)
+  glm::dvec3 origin{0.0};              // world position of the local frame's origin, metres
+  std::vector<glm::vec3> probes;       // probe positions, local frame, metres
+  std::vector<ShRgb> sh;               // one per probe: incident radiance SH
+  std::vector<Tet> tets;               // tetrahedralization of `probes` (every probe is a vertex)
+  std::string generator;               // free text: tool version and options that produced the file
+};
+
+enum class LevelStatus { kOk, kCannotOpen, kNotALevel, kUnsupportedVersion, kTruncated, kCorrupt, kWriteFailed };
+
+struct LevelResult {
+  LevelStatus status = LevelStatus::kOk;
+  std::string message;  // one line naming the problem (empty when ok)
+  explicit operator bool() const { return status == LevelStatus::kOk; }
+};
+
+// Reads `path`. Safe on untrusted input: every count, index and size is validated before use; on failure
+// `out` is left empty and the result names the problem. Allocates the level's arrays.
+LevelResult loadLevel(const std::string& path, Level& out);
+
+// Checks the in-memory invariants (sizes agree, indices in range, finite numbers). Used by load and save.
+LevelResult validateLevel(const Level& level);
+
+// Writes `level` to `path` atomically (a temporary file beside it, then rename): a failed write never
+// leaves a partial file. The output is a pure function of `level` (bit-identical for equal input).
+LevelResult saveLevel(const std::string& path, const Level& level);
+
+}  // namespace tetraprobe

@@ -1,0 +1,52 @@
+// CPU queries against a loaded level: which tet holds a point, its barycentric weights, and the
+// interpolated irradiance. Permissive: standard library and GLM only. Thread-safe for concurrent const use.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec4.hpp>
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/runtime/level.h"
+
+namespace tetraprobe {
+
+struct Location {
+  int32_t tet = -1;          // containing tet, or the hull tet the answer was taken from; -1 for an empty level
+  glm::vec4 weights{0.0f};   // weights of tet.v[0..3]: non-negative, sum to 1
+  bool inside = false;       // true when the point lies in the tet (within 1e-6 on each weight)
+};
+
+class ProbeQuery {
+ public:
+  // Keeps a reference to `level` (which must outlive the query) and builds its acceleration data.
+  explicit ProbeQuery(const Level& level);
+
+  // Locates a world-space point. `hint` is a tet to start from (for example the tet of the same object
+  // last frame), or -1. Outside the probe hull the answer is defined and finite: the nearest hull tet with
+  // its weights clamped to be non-negative and renormalized.
+  Location locate(const glm::dvec3& world, int32_t hint = -1) const;
+
+  // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
+  // given it is read as the walk's starting hint and updated with the tet found (per-object caching).
+  glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;
+
+  // Batch form: out[i] = irradiance(world[i], normal[i]). Runs on up to `threads` threads (0 = all cores).
+  void irradianceBatch(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t count,
+                       int threads = 0) const;
+
+  const Level& level() const { return level_; }
+
+ private:
+  const Level& level_;
+  // Start-tet grid: for each cell of a coarse uniform grid over the probe bounds, a tet near its centre,
+  // so walks are short.
+  glm::vec3 gridMin_{0.0f};
+  glm::vec3 gridCellSize_{1.0f};
+  glm::ivec3 gridDims_{0};
+  std::vector<int32_t> gridStart_;
+};
+
+}  // namespace tetraprobe

@@ -1,0 +1,21 @@
+// Automatic probe placement. Build side.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace tetraprobe {
+
+// A regular grid at `spacing` metres covering [lo, hi] (inclusive, centred so the margins are equal), in
+// x-fastest order. Throws InputError for a non-positive or non-finite spacing, or when the grid would exceed
+// `maxProbes` points.
+std::vector<glm::dvec3> placeGridProbes(const glm::dvec3& lo, const glm::dvec3& hi, double spacing,
+                                        size_t maxProbes = 5'000'000);
+
+// Reads user probes from a CSV file: one `x,y,z` a line (world metres); blank lines and lines starting with
+// '#' are skipped. Throws InputError naming the file and line for anything else (non-numbers, NaN, Inf).
+std::vector<glm::dvec3> readProbeCsv(const std::string& path);
+
+}  // namespace tetraprobe

@@ -1,0 +1,32 @@
+// Delaunay tetrahedralization of probe positions, and the per-tet records the runtime reads.
+// Build side (links CGAL, GPL): no CGAL type appears in this header.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/runtime/level.h"
+
+namespace tetraprobe {
+
+struct TetMesh {
+  // Vertex indices into the input points, positively oriented (orient3d(v0,v1,v2,v3) > 0).
+  std::vector<std::array<int32_t, 4>> tets;
+  // neighbours[t][i]: the tet sharing the face opposite tets[t][i], or -1 on the convex hull.
+  std::vector<std::array<int32_t, 4>> neighbours;
+};
+
+// Delaunay tetrahedralization with exact predicates (CGAL, EPICK). Deterministic: the same points in the same
+// order give the same mesh. Throws InputError naming the problem for fewer than 4 points, non-finite
+// coordinates, exact duplicates, or points that are all coplanar/collinear.
+TetMesh tetrahedralizeDelaunay(const std::vector<glm::dvec3>& points);
+
+// Runtime tet records (tetraprobe::Tet, barycentric rows computed in double) with positions taken relative
+// to `origin`. One record per mesh tet, same order.
+std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const TetMesh& mesh,
+                                 const glm::dvec3& origin);
+
+}  // namespace tetraprobe

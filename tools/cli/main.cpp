@@ -1,0 +1,2 @@
+// tetraprobe command-line tool (being written).
+int main() { return 0; }
