@@ -35,8 +35,8 @@ inline constexpr double kA1 = 2.0 * std::numbers::pi / 3.0;  // band 1
 inline constexpr double kA2 = std::numbers::pi / 4.0;        // band 2
 
 constexpr double sqr(double x) { return x * x; }
-// The closed forms, checked at compile time (tolerance 1e-15: the literals carry 16-17 digits).
-constexpr bool near(double a, double b) { return (a - b) < 1e-15 && (b - a) < 1e-15; }
+// The closed forms, checked at compile time (relative tolerance 1e-14: the literals carry 16-17 digits).
+constexpr bool near(double a, double b) { return (a - b) < 1e-14 * b && (b - a) < 1e-14 * b; }
 static_assert(near(sqr(kY00) * 4.0 * std::numbers::pi, 1.0), "Y00 = 1/(2 sqrt(pi))");
 static_assert(near(sqr(kY1) * 4.0 * std::numbers::pi, 3.0), "Y1 = sqrt(3/(4pi))");
 static_assert(near(sqr(kY2n2) * 4.0 * std::numbers::pi, 15.0), "Y2,-2 = sqrt(15/pi)/2");
