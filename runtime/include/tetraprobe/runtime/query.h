@@ -13,6 +13,16 @@
 
 namespace tetraprobe {
 
+// A coarse uniform grid over the probe bounds (local frame) naming, per cell, a tet near the cell centre to
+// start a walk from, so walks stay short. Shared by the CPU query and the GPU upload (same layout as
+// shaders/tetraprobe_layout.glsl). Cell (x,y,z) is at index x + dims.x * (y + dims.y * z).
+struct StartGrid {
+  glm::vec3 min{0.0f};       // local frame, metres
+  glm::vec3 cellSize{1.0f};  // metres
+  glm::ivec3 dims{0};
+  std::vector<int32_t> startTet;
+};
+
 struct Location {
   int32_t tet = -1;          // containing tet, or the hull tet the answer was taken from; -1 for an empty level
   glm::vec4 weights{0.0f};   // weights of tet.v[0..3]: non-negative, sum to 1
@@ -38,15 +48,11 @@ class ProbeQuery {
                        int threads = 0) const;
 
   const Level& level() const { return level_; }
+  const StartGrid& startGrid() const { return grid_; }
 
  private:
   const Level& level_;
-  // Start-tet grid: for each cell of a coarse uniform grid over the probe bounds, a tet near its centre,
-  // so walks are short.
-  glm::vec3 gridMin_{0.0f};
-  glm::vec3 gridCellSize_{1.0f};
-  glm::ivec3 gridDims_{0};
-  std::vector<int32_t> gridStart_;
+  StartGrid grid_;
 };
 
 }  // namespace tetraprobe
