@@ -1,0 +1,74 @@
+// Accuracy evaluation: compares probe lookups with path-traced ground truth at random surface points and
+// reports error against run time and memory. Build side (uses the Embree reference oracle).
+//
+// Error measures (per point p, channel c, lookup x, reference r, irradiance in W/m^2):
+//   relmse         = mean over p,c of (x - r)^2 / (r^2 + 0.01)
+//   rel error(p)   = mean over c of |x - r| / sqrt(r^2 + 0.01)
+//   mean_rel_error = mean over p of rel error(p);  p95_rel_error = its 95th percentile
+//   leak           = mean over p of max(0, lum(x) - lum(r)) / max(lum(r), 0.01)   (light that should not be there)
+// The 0.01 W/m^2 floor keeps near-black points from dominating; it is ~1e-4 of a lit room's irradiance.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/bake/bake.h"
+#include "tetraprobe/runtime/level.h"
+
+namespace tetraprobe {
+
+struct EvalOptions {
+  int points = 512;              // surface points
+  int samplesPerPoint = 4096;    // reference paths per point
+  int referenceBounces = 8;      // reference path depth (converged ground truth, not the bake's depth)
+  uint64_t seed = 0x5eed0e7a1ull;
+  int threads = 0;
+  bool progress = true;
+};
+
+struct MethodResult {
+  std::string name;
+  double relmse = 0.0;
+  double meanRelError = 0.0;
+  double p95RelError = 0.0;
+  double leak = 0.0;
+  double cpuNsPerQuery = 0.0;    // single thread, median of repeated timed passes over all points
+  uint64_t bytes = 0;            // data the method needs at run time
+  std::vector<glm::vec3> values; // per-point lookups (same order as EvalReport::points)
+};
+
+struct EvalPoint {
+  SurfacePoint surface;
+  ReferenceIrradiance reference;
+};
+
+struct EvalReport {
+  int samplesPerPoint = 0;
+  int referenceBounces = 0;
+  double meanRelStderr = 0.0;    // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
+  double referenceSeconds = 0.0;
+  std::vector<EvalPoint> points;
+  std::vector<MethodResult> methods;
+};
+
+// A lookup method under test: irradiance at (world position, unit normal).
+struct LookupMethod {
+  std::string name;
+  uint64_t bytes = 0;
+  std::function<glm::vec3(const glm::dvec3&, const glm::vec3&)> lookup;
+};
+
+// Draws the points and their references (content = the level's content) once.
+EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options);
+
+// Scores one method against the report's references and appends it to report.methods.
+void scoreMethod(EvalReport& report, const LookupMethod& method);
+
+// The standard methods for a level: `tet` (ProbeQuery) and `nearest` (nearest probe's SH).
+std::vector<LookupMethod> standardMethods(const Level& level);
+
+}  // namespace tetraprobe
