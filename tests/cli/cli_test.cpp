@@ -1,0 +1,232 @@
+// End-to-end tests of the tetraprobe CLI: each runs the real binary the way a user or CI pipeline does and
+// checks what they rely on: exit codes (0 ok, 1 failure, 2 bad usage/input), one-line errors naming the
+// problem, no partial output after a failure, reports with the documented keys, bit-identical levels for any
+// thread count, and light where the sample level's light is.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+  int code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tetraprobe_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Run run(const std::string& args) {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(TETRAPROBE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    Run r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+  fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  fs::path path(const std::string& name) const { return dir_ / name; }
+  // No file in the directory other than the test's own inputs and captured streams.
+  bool onlyInputsLeft(const std::vector<std::string>& inputs) const {
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      const std::string n = e.path().filename().string();
+      if (n == "stdout.txt" || n == "stderr.txt") continue;
+      if (std::find(inputs.begin(), inputs.end(), n) == inputs.end()) return false;
+    }
+    return true;
+  }
+
+  static std::string sample() { return std::string(TETRAPROBE_SOURCE_DIR) + "/samples/two_rooms/two_rooms.scene.json"; }
+
+  fs::path dir_;
+};
+
+int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+// A closed box (inward faces) with an emissive ceiling tile: small enough to bake in well under a second.
+const char* kBoxObj = R"(mtllib box.mtl
+v 0 0 0
+v 4 0 0
+v 4 0 4
+v 0 0 4
+v 0 3 0
+v 4 3 0
+v 4 3 4
+v 0 3 4
+v 1.5 2.99 1.5
+v 2.5 2.99 1.5
+v 2.5 2.99 2.5
+v 1.5 2.99 2.5
+usemtl wall
+f 1 2 3
+f 1 3 4
+f 5 8 7
+f 5 7 6
+f 1 5 6
+f 1 6 2
+f 2 6 7
+f 2 7 3
+f 3 7 8
+f 3 8 4
+f 4 8 5
+f 4 5 1
+usemtl light
+f 9 12 11
+f 9 11 10
+)";
+const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
+
+}  // namespace
+
+// Every command answers --help with usage on stdout and exit 0.
+TEST_F(Cli, HelpExitsZeroForEveryCommand) {
+  for (const char* c : {"bake", "inspect", "query", "render", "eval"}) {
+    const Run r = run(std::string(c) + " --help");
+    EXPECT_EQ(r.code, 0) << c << ": " << r.err;
+    EXPECT_NE(r.out.find("usage: tetraprobe"), std::string::npos) << c;
+  }
+  EXPECT_EQ(run("--help").code, 0);
+}
+
+// Bad usage is exit 2 with exactly one line on stderr.
+TEST_F(Cli, BadUsageExitsTwoWithOneLine) {
+  for (const char* a : {"", "frobnicate", "bake", "bake x.obj", "bake x.obj -o", "bake x.obj -o l.tpb --spacing abc",
+                        "bake x.obj -o l.tpb --no-such-flag", "query", "render a b", "eval a"}) {
+    const Run r = run(a);
+    EXPECT_EQ(r.code, 2) << "'" << a << "': " << r.err;
+    if (std::string(a).size() > 0) EXPECT_EQ(lineCount(r.err), 1) << "'" << a << "': " << r.err;
+  }
+}
+
+// Bad input files: exit 2, the message names the file or problem, and no level file (or temporary) is left.
+TEST_F(Cli, BadInputExitsTwoAndLeavesNoOutput) {
+  write("box.mtl", kBoxMtl);
+  write("broken.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
+  write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+  write("empty.obj", "# nothing\n");
+  write("box.obj", kBoxObj);
+  write("coplanar.csv", "1 ,1,1\n2,1,1\n1,1,2\n2,1,2\n");
+  write("bad.scene.json", "{ \"mesh\": ");
+  struct Case {
+    std::string args, mentions;
+  } cases[] = {
+      {"bake " + path("missing.obj").string() + " -o " + path("l.tpb").string(), "missing.obj"},
+      {"bake " + path("broken.obj").string() + " -o " + path("l.tpb").string(), "broken.obj"},
+      {"bake " + path("nan.obj").string() + " -o " + path("l.tpb").string(), "nan.obj"},
+      {"bake " + path("empty.obj").string() + " -o " + path("l.tpb").string(), "empty.obj"},
+      {"bake " + path("bad.scene.json").string() + " -o " + path("l.tpb").string(), "bad.scene.json"},
+      {"bake " + path("box.obj").string() + " --probes " + path("coplanar.csv").string() + " -o " +
+           path("l.tpb").string(),
+       "coplanar"},
+      {"inspect " + path("box.obj").string(), "box.obj"},
+  };
+  for (const auto& c : cases) {
+    const Run r = run(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+    EXPECT_EQ(lineCount(r.err), 1) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.mentions), std::string::npos) << "error should name '" << c.mentions << "': " << r.err;
+    EXPECT_TRUE(onlyInputsLeft({"box.mtl", "box.obj", "broken.obj", "nan.obj", "empty.obj", "coplanar.csv",
+                                "bad.scene.json"}))
+        << c.args;
+  }
+}
+
+// The same input and options give a bit-identical level whatever the thread count, and the report has the
+// documented keys.
+TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string base = "bake " + path("box.obj").string() + " --samples 32 --spacing 0.75";
+  const Run a = run(base + " --threads 1 -o " + path("a.tpb").string() + " --report " + path("a.json").string());
+  ASSERT_EQ(a.code, 0) << a.err;
+  const Run b = run(base + " --threads 2 -o " + path("b.tpb").string());
+  ASSERT_EQ(b.code, 0) << b.err;
+  const std::string ba = slurp(path("a.tpb")), bb = slurp(path("b.tpb"));
+  ASSERT_FALSE(ba.empty());
+  EXPECT_TRUE(ba == bb) << "level files differ between 1 and 2 threads";
+
+  const auto j = nlohmann::json::parse(slurp(path("a.json")));
+  EXPECT_GE(j.at("probes").at("count").get<int>(), 4);
+  EXPECT_GE(j.at("tets").at("count").get<int>(), 1);
+  EXPECT_GT(j.at("bytes").at("total").get<int64_t>(), 0);
+  for (const char* stage : {"load", "place", "tetrahedralize", "bake", "write", "total"})
+    EXPECT_TRUE(j.at("timings_s").contains(stage)) << stage;
+
+  const Run insp = run("inspect --json " + path("a.tpb").string());
+  ASSERT_EQ(insp.code, 0) << insp.err;
+  const auto ij = nlohmann::json::parse(insp.out);
+  EXPECT_EQ(ij.at("probes").at("count"), j.at("probes").at("count"));
+  EXPECT_EQ(ij.at("tets").at("count"), j.at("tets").at("count"));
+}
+
+// Query: a point lit from above by the ceiling light gets more light on an up-facing... no: on a surface
+// facing the light (normal up toward the ceiling) than facing away, and the batch form agrees with the single
+// form line by line.
+TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  ASSERT_EQ(run("bake " + path("box.obj").string() + " --samples 64 -o " + path("l.tpb").string()).code, 0);
+  const Run up = run("query " + path("l.tpb").string() + " 2 1.5 2 0 1 0");
+  const Run down = run("query " + path("l.tpb").string() + " 2 1.5 2 0 -1 0");
+  ASSERT_EQ(up.code, 0) << up.err;
+  ASSERT_EQ(down.code, 0) << down.err;
+  float ur, ug, ub, dr, dg, db;
+  ASSERT_EQ(std::sscanf(up.out.c_str(), "%f,%f,%f", &ur, &ug, &ub), 3);
+  ASSERT_EQ(std::sscanf(down.out.c_str(), "%f,%f,%f", &dr, &dg, &db), 3);
+  EXPECT_GT(ug, 2.0f * dg) << "facing the ceiling light should see much more light";
+
+  write("pts.csv", "2,1.5,2,0,1,0\n# comment\n2,1.5,2,0,-1,0\n");
+  const Run batch = run("query " + path("l.tpb").string() + " --points " + path("pts.csv").string());
+  ASSERT_EQ(batch.code, 0) << batch.err;
+  EXPECT_EQ(batch.out, up.out + down.out);
+
+  write("bad.csv", "2,1.5,2,0,1\n");
+  const Run bad = run("query " + path("l.tpb").string() + " --points " + path("bad.csv").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("bad.csv:1"), std::string::npos) << bad.err;
+}
+
+// The bundled sample: the lit room is much brighter than the room lit only through the doorway, and the
+// room behind the doorway still gets some light.
+TEST_F(Cli, SampleLitRoomBrighterThanDarkRoom) {
+  ASSERT_EQ(run("bake " + sample() + " --samples 64 -o " + path("s.tpb").string()).code, 0);
+  // Probe heights 1.5 m, facing up; room A is x in [0,4], room B x in [4.2,8.2], z in [0,4].
+  const Run a = run("query " + path("s.tpb").string() + " 2 1.5 2 0 1 0");
+  const Run b = run("query " + path("s.tpb").string() + " 7 1.5 2 0 1 0");
+  ASSERT_EQ(a.code, 0) << a.err;
+  float ar, ag, ab, br, bg, bb;
+  ASSERT_EQ(std::sscanf(a.out.c_str(), "%f,%f,%f", &ar, &ag, &ab), 3);
+  ASSERT_EQ(std::sscanf(b.out.c_str(), "%f,%f,%f", &br, &bg, &bb), 3);
+  EXPECT_GT(ag, 3.0f * bg) << "lit room " << ag << " vs dark room " << bg;
+  EXPECT_GT(bg, 0.0f) << "light reaches the dark room through the doorway";
+}
