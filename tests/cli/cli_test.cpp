@@ -189,9 +189,8 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   EXPECT_EQ(ij.at("tets").at("count"), j.at("tets").at("count"));
 }
 
-// Query: a point lit from above by the ceiling light gets more light on an up-facing... no: on a surface
-// facing the light (normal up toward the ceiling) than facing away, and the batch form agrees with the single
-// form line by line.
+// Query: below a ceiling light, a surface facing up (toward the light) receives much more than one facing
+// down, and the batch form agrees with the single form line by line.
 TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
