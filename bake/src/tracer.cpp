@@ -1,1 +1,215 @@
-// (being written)
+// SceneTracer: one Embree 3 triangle geometry built from a Scene, closest-hit and any-hit queries with
+// rtcIntersect1 / rtcOccluded1, plus the tables the samplers need (normals, areas, an emissive power CDF).
+// References: Embree 3 API manual (rtcNewGeometry, rtcSetNewGeometryBuffer, rtcIntersect1); Wald et al. 2014,
+// "Embree: a kernel framework for efficient CPU ray tracing".
+#include "tetraprobe/bake/tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "sampling.h"
+#include "tetraprobe/common/error.h"
+#include "tracer_impl.h"
+
+namespace tetraprobe {
+
+namespace {
+
+bool finite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+std::string where(const Scene& scene) {
+  return scene.sourcePath.empty() ? std::string("scene") : scene.sourcePath;
+}
+
+void validate(const Scene& scene) {
+  if (scene.triangles.empty()) throw InputError(where(scene) + ": no triangles to trace");
+  for (size_t i = 0; i < scene.positions.size(); ++i)
+    if (!finite(scene.positions[i]))
+      throw InputError(where(scene) + ": vertex " + std::to_string(i) + " has a non-finite position");
+  const size_t nv = scene.positions.size();
+  for (size_t i = 0; i < scene.triangles.size(); ++i) {
+    const glm::uvec3 t = scene.triangles[i];
+    if (t.x >= nv || t.y >= nv || t.z >= nv)
+      throw InputError(where(scene) + ": triangle " + std::to_string(i) +
+                       " has a vertex index out of range (" + std::to_string(nv) + " vertices)");
+  }
+  if (scene.triangleMaterial.size() != scene.triangles.size())
+    throw InputError(where(scene) + ": " + std::to_string(scene.triangleMaterial.size()) +
+                     " triangle materials for " + std::to_string(scene.triangles.size()) + " triangles");
+  for (size_t i = 0; i < scene.triangleMaterial.size(); ++i)
+    if (scene.triangleMaterial[i] >= scene.materials.size())
+      throw InputError(where(scene) + ": triangle " + std::to_string(i) + " uses material " +
+                       std::to_string(scene.triangleMaterial[i]) + " of " +
+                       std::to_string(scene.materials.size()));
+  for (const Material& m : scene.materials)
+    if (!finite(m.albedo) || !finite(m.emission) || glm::any(glm::lessThan(m.emission, glm::vec3(0.0f))) ||
+        glm::any(glm::lessThan(m.albedo, glm::vec3(0.0f))))
+      throw InputError(where(scene) + ": material '" + m.name + "' has a negative or non-finite colour");
+}
+
+void buildTables(SceneTracer::Impl& impl) {
+  const Scene& scene = *impl.scene;
+  const size_t n = scene.triangles.size();
+  impl.normals.resize(n);
+  impl.areas.resize(n);
+  impl.areaCdf.resize(n);
+  impl.emissivePdfArea.assign(n, 0.0f);
+  double areaSum = 0.0;
+  std::vector<double> power;
+  for (size_t i = 0; i < n; ++i) {
+    glm::vec3 p0, p1, p2;
+    impl.vertices(uint32_t(i), p0, p1, p2);
+    const glm::vec3 c = glm::cross(p1 - p0, p2 - p0);
+    const float len = glm::length(c);
+    impl.normals[i] = len > 0.0f ? c / len : glm::vec3(0.0f);
+    impl.areas[i] = 0.5f * len;
+    areaSum += impl.areas[i];
+    impl.areaCdf[i] = areaSum;
+    const float lum = bake_detail::luminance(impl.material(uint32_t(i)).emission);
+    if (lum > 0.0f && impl.areas[i] > 0.0f) {
+      impl.emissive.push_back(uint32_t(i));
+      power.push_back(double(lum) * impl.areas[i] * std::numbers::pi);
+      impl.emissiveArea += impl.areas[i];
+    }
+  }
+  impl.totalArea = areaSum;
+  double powerSum = 0.0;
+  impl.emissiveCdf.resize(power.size());
+  for (size_t k = 0; k < power.size(); ++k) impl.emissiveCdf[k] = (powerSum += power[k]);
+  impl.emissivePower = powerSum;
+  for (size_t k = 0; k < power.size(); ++k) {
+    impl.emissiveCdf[k] /= powerSum;
+    const uint32_t tri = impl.emissive[k];
+    impl.emissivePdfArea[tri] = float(power[k] / powerSum / impl.areas[tri]);
+  }
+  if (!impl.emissiveCdf.empty()) impl.emissiveCdf.back() = 1.0;
+
+  glm::vec3 lo, hi;
+  sceneBounds(scene, lo, hi);
+  const float maxAbs = bake_detail::maxComponent(glm::max(glm::abs(lo), glm::abs(hi)));
+  impl.rayEpsilon = std::max(1e-6f, 5e-6f * (glm::length(hi - lo) + maxAbs));
+}
+
+void embreeError(void*, RTCError code, const char* str) {
+  // Reported through rtcGetDeviceError after each call that can fail; nothing to do here.
+  (void)code;
+  (void)str;
+}
+
+void checkDevice(RTCDevice device, const char* what) {
+  const RTCError err = rtcGetDeviceError(device);
+  if (err != RTC_ERROR_NONE)
+    throw std::runtime_error(std::string("Embree: ") + what + " failed (error " + std::to_string(int(err)) +
+                             ")");
+}
+
+}  // namespace
+
+SceneTracer::SceneTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  validate(scene);
+  impl_->scene = &scene;
+  buildTables(*impl_);
+
+  bake_detail::DenormalScope denormals;
+  impl_->device = rtcNewDevice(nullptr);
+  if (!impl_->device) throw std::runtime_error("Embree: rtcNewDevice failed");
+  rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
+  impl_->rtcScene = rtcNewScene(impl_->device);
+  rtcSetSceneBuildQuality(impl_->rtcScene, RTC_BUILD_QUALITY_HIGH);
+  rtcSetSceneFlags(impl_->rtcScene, RTC_SCENE_FLAG_ROBUST);
+  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), scene.positions.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                            3 * sizeof(unsigned), scene.triangles.size()));
+  checkDevice(impl_->device, "geometry buffers");
+  for (size_t i = 0; i < scene.positions.size(); ++i)
+    for (int k = 0; k < 3; ++k) vb[3 * i + k] = scene.positions[i][k];
+  for (size_t i = 0; i < scene.triangles.size(); ++i)
+    for (int k = 0; k < 3; ++k) ib[3 * i + k] = scene.triangles[i][k];
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(impl_->rtcScene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(impl_->rtcScene);
+  checkDevice(impl_->device, "scene build");
+}
+
+SceneTracer::~SceneTracer() {
+  if (impl_->rtcScene) rtcReleaseScene(impl_->rtcScene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+const Scene& SceneTracer::scene() const {
+  return *impl_->scene;
+}
+
+float SceneTracer::rayEpsilon() const {
+  return impl_->rayEpsilon;
+}
+
+Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray.org_x = origin.x;
+  rh.ray.org_y = origin.y;
+  rh.ray.org_z = origin.z;
+  rh.ray.tnear = tnear;
+  rh.ray.dir_x = dir.x;
+  rh.ray.dir_y = dir.y;
+  rh.ray.dir_z = dir.z;
+  rh.ray.time = 0.0f;
+  rh.ray.tfar = tfar;
+  rh.ray.mask = ~0u;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->rtcScene, &context, &rh);
+  Hit hit;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.hit = true;
+  hit.t = rh.ray.tfar;
+  hit.triangle = rh.hit.primID;
+  hit.geometricNormal = impl_->normals[hit.triangle];
+  hit.frontFace = glm::dot(dir, hit.geometricNormal) < 0.0f;
+  hit.u = rh.hit.u;
+  hit.v = rh.hit.v;
+  return hit;
+}
+
+bool SceneTracer::occluded(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray;
+  ray.org_x = origin.x;
+  ray.org_y = origin.y;
+  ray.org_z = origin.z;
+  ray.tnear = tnear;
+  ray.dir_x = dir.x;
+  ray.dir_y = dir.y;
+  ray.dir_z = dir.z;
+  ray.time = 0.0f;
+  ray.tfar = tfar;
+  ray.mask = ~0u;
+  ray.id = 0;
+  ray.flags = 0;
+  rtcOccluded1(impl_->rtcScene, &context, &ray);
+  return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+}
+
+glm::vec3 skyRadiance(const Scene& scene, const glm::vec3& dir) {
+  if (!scene.hasSkyGradient()) return scene.skyRadiance;
+  const float t = std::clamp(dir.y, 0.0f, 1.0f);
+  return scene.skyHorizonRadiance + (scene.skyRadiance - scene.skyHorizonRadiance) * t;
+}
+
+}  // namespace tetraprobe

@@ -1,0 +1,160 @@
+// Unidirectional path tracer for Lambertian scenes with next-event estimation: emissive triangles sampled by
+// power and combined with cosine-weighted BSDF sampling by the power heuristic; point, spot and directional
+// lights by shadow rays; sky reached by BSDF-sampled rays; Russian roulette after the second bounce.
+// References: Veach 1997 (PhD thesis, ch. 9 "Multiple importance sampling"); Pharr, Jakob & Humphreys,
+// "Physically Based Rendering", 4th ed., ch. 13 (path tracing, NEE, Russian roulette); Arvo & Kirk 1990
+// ("Particle transport and image synthesis", Russian roulette).
+//
+// The sky is not light-sampled: its best general strategy here is the cosine lobe itself, so sky radiance
+// is always picked up by BSDF rays with MIS weight 1. The sun (directional light) is never hit by BSDF rays;
+// it is a light-sampled-only source (like a delta), so its NEE carries weight 1 too.
+#include "path_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "sampling.h"
+#include "tetraprobe/runtime/level.h"
+#include "tracer_impl.h"
+
+namespace tetraprobe::bake_detail {
+
+namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+float smoothstep(float e0, float e1, float x) {
+  if (e1 <= e0) return x >= e1 ? 1.0f : 0.0f;
+  const float t = std::clamp((x - e0) / (e1 - e0), 0.0f, 1.0f);
+  return t * t * (3.0f - 2.0f * t);
+}
+
+// Index of the first CDF entry >= u (u in [0, 1)).
+size_t sampleCdf(const std::vector<double>& cdf, double u) {
+  const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
+  return std::min(size_t(it - cdf.begin()), cdf.size() - 1);
+}
+
+}  // namespace
+
+float spotFactor(const Light& l, const glm::vec3& toPoint) {
+  if (l.type != LightType::kSpot) return 1.0f;
+  const float c = glm::dot(toPoint, l.direction);
+  return smoothstep(std::cos(l.outerConeRad), std::cos(l.innerConeRad), c);
+}
+
+glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
+                             const glm::vec3& n, Rng& rng) {
+  const Scene& scene = tracer.scene();
+  const float eps = tracer.rayEpsilon();
+  glm::vec3 e(0.0f);
+  for (const Light& l : scene.lights) {
+    if (l.type == LightType::kDirectional) {
+      const glm::vec3 axis = -glm::normalize(l.direction);
+      glm::vec3 w = axis;
+      if (l.angularRadiusRad > 0.0f) {
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        w = uniformCone(axis, std::cos(l.angularRadiusRad), u1, u2);
+      }
+      const float c = glm::dot(n, w);
+      if (c <= 0.0f) continue;
+      if (tracer.occluded(origin, w, 0.0f, kInfinity)) continue;
+      e += l.intensity * c;
+      continue;
+    }
+    const glm::vec3 d = l.position - x;
+    const float r2 = glm::dot(d, d);
+    if (!(r2 > 0.0f)) continue;
+    const glm::vec3 w = d / std::sqrt(r2);
+    const float c = glm::dot(n, w);
+    if (c <= 0.0f) continue;
+    const float spot = spotFactor(l, -w);
+    if (spot <= 0.0f) continue;
+    glm::vec3 target = l.position;
+    if (l.radius > 0.0f) {
+      const float u1 = rng.uniform(), u2 = rng.uniform();
+      target += uniformSphere(u1, u2) * l.radius;
+    }
+    const glm::vec3 s = target - origin;
+    const float dist = glm::length(s);
+    if (dist > eps && tracer.occluded(origin, s / dist, 0.0f, dist - eps)) continue;
+    e += l.intensity * (spot * c / r2);
+  }
+  return e;
+}
+
+glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
+                             Rng& rng) {
+  const SceneTracer::Impl& impl = tracer.impl();
+  if (impl.emissive.empty()) return glm::vec3(0.0f);
+  const double uLight = rng.uniformDouble();
+  const float u1 = rng.uniform(), u2 = rng.uniform();
+  const uint32_t tri = impl.emissive[sampleCdf(impl.emissiveCdf, uLight)];
+  const glm::vec2 b = uniformTriangle(u1, u2);
+  const glm::vec3 p = impl.pointOn(tri, b.x, b.y);
+  const glm::vec3 d = p - origin;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > 0.0f)) return glm::vec3(0.0f);
+  const float dist = std::sqrt(dist2);
+  const glm::vec3 w = d / dist;
+  const float cosReceiver = glm::dot(n, w);
+  const float cosLight = -glm::dot(impl.normals[tri], w);
+  if (cosReceiver <= 0.0f || cosLight <= 0.0f) return glm::vec3(0.0f);  // emission is front-face only
+  const float pdfLight = impl.emissivePdfArea[tri] * dist2 / cosLight;
+  const float eps = tracer.rayEpsilon();
+  if (dist > eps && tracer.occluded(origin, w, 0.0f, dist - eps)) return glm::vec3(0.0f);
+  const float weight = powerHeuristic(pdfLight, cosReceiver * kInvPi);
+  return impl.material(tri).emission * (cosReceiver * weight / pdfLight);
+}
+
+glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
+                           float prevPdf, const TraceSettings& settings, Rng& rng) {
+  const SceneTracer::Impl& impl = tracer.impl();
+  const Scene& scene = *impl.scene;
+  const float eps = impl.rayEpsilon;
+  glm::vec3 radiance(0.0f), throughput(1.0f);
+  glm::vec3 o = origin, d = dir;
+  for (int vertex = 0;; ++vertex) {
+    const bool direct = vertex == 0;
+    const Hit hit = tracer.intersect(o, d, 0.0f, kInfinity);
+    if (!hit.hit) {
+      if (!direct || (settings.content & kContentSky)) radiance += throughput * skyRadiance(scene, d);
+      break;
+    }
+    const Material& m = impl.material(hit.triangle);
+    if (hit.frontFace && maxComponent(m.emission) > 0.0f &&
+        (!direct || (settings.content & kContentEmissive))) {
+      float weight = 1.0f;
+      if (prevPdf > 0.0f) {
+        const float cosLight = -glm::dot(hit.geometricNormal, d);
+        const float pdfLight = impl.emissivePdfArea[hit.triangle] * hit.t * hit.t / cosLight;
+        weight = powerHeuristic(prevPdf, pdfLight);
+      }
+      radiance += throughput * m.emission * weight;
+    }
+    if (vertex >= settings.bounces) break;
+    if (direct && !(settings.content & kContentIndirect)) break;
+    if (maxComponent(m.albedo) <= 0.0f) break;
+    if (vertex >= 2) {  // Russian roulette from the third bounce on
+      const float survive = std::min(1.0f, maxComponent(throughput));
+      if (rng.uniform() >= survive) break;
+      throughput /= survive;
+    }
+    const glm::vec3 n = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
+    const glm::vec3 p = impl.pointOn(hit.triangle, hit.u, hit.v) + n * eps;
+    const glm::vec3 irradiance =
+        emissiveIrradiance(tracer, p, n, rng) + punctualIrradiance(tracer, p, p, n, rng);
+    radiance += throughput * m.albedo * kInvPi * irradiance;
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    d = cosineHemisphere(n, u1, u2);
+    prevPdf = std::max(glm::dot(n, d), 1e-12f) * kInvPi;
+    o = p;
+    throughput *= m.albedo;
+  }
+  return radiance;
+}
+
+}  // namespace tetraprobe::bake_detail

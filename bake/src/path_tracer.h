@@ -1,0 +1,49 @@
+// The bake's unidirectional path tracer (Lambertian surfaces, next-event estimation with MIS), shared by the
+// probe bake and the reference oracle. Internal to the bake module.
+//
+// Light content (runtime/level.h ProbeContent), seen from the receiver (a probe or a reference point):
+// the first surface a receiver's ray meets, or the sky it escapes to, is *direct* light (kContentEmissive,
+// kContentSky); everything reflected at that surface or later is kContentIndirect, whatever lit it (punctual
+// lights included). Point/spot/directional light reaching the receiver without a bounce is
+// kContentDirectPunctual and is added by the callers (analytically for probes, by NEE at reference points).
+#pragma once
+
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "rng.h"
+#include "tetraprobe/bake/tracer.h"
+
+namespace tetraprobe::bake_detail {
+
+struct TraceSettings {
+  int bounces = 2;       // diffuse reflections after the first hit
+  uint32_t content = 0;  // ProbeContent flags
+};
+
+// Radiance in W/(m^2 sr) arriving at `origin` from unit direction `dir` (the ray starts at origin, tnear 0).
+// `prevPdf` > 0: `dir` was drawn from a cosine lobe with this solid-angle pdf at a point that also sampled
+// the emissive triangles (emissiveIrradiance), so emission met by this ray is MIS-weighted against that;
+// 0: no light sampling was done at origin and emission counts fully.
+glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
+                           float prevPdf, const TraceSettings& settings, Rng& rng);
+
+// One-sample estimate of the irradiance (W/m^2) at `origin` (already offset from its surface) with unit
+// normal n from emissive triangles, sampled by power and MIS-weighted (power heuristic) against cosine
+// sampling of the hemisphere about n. Shadow-tested.
+glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
+                             Rng& rng);
+
+// Irradiance (W/m^2) at point x with unit normal n from every point, spot and directional light; shadow rays
+// start at `origin` (x offset off its surface, or x itself in free space). Point/spot: I cos / r^2 with
+// r = |light - x|, spot cone smoothstep(cos outer, cos inner, cos angle); a light radius > 0 jitters the
+// shadow ray's end on that sphere (soft shadows). Directional: E cos(w) for w uniform in the sun disc's cone
+// (the disc's perpendicular irradiance is E). Exact (no randomness) for zero radii.
+glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
+                             const glm::vec3& n, Rng& rng);
+
+// Spot cone attenuation for light `l` towards unit direction `toPoint` (from the light to the receiver).
+float spotFactor(const Light& l, const glm::vec3& toPoint);
+
+}  // namespace tetraprobe::bake_detail

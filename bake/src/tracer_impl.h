@@ -1,0 +1,82 @@
+// SceneTracer::Impl: the Embree handles and the per-triangle tables the bake's samplers read (geometric
+// normals, areas, an area CDF over all triangles and a power CDF over emissive ones). Also the
+// flush-to-zero scope every tracing thread enters. Internal to the bake module.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/bake/tracer.h"
+
+#if defined(__SSE__) || defined(__x86_64__)
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+#define TETRAPROBE_BAKE_HAS_MXCSR 1
+#endif
+
+namespace tetraprobe {
+
+struct SceneTracer::Impl {
+  const Scene* scene = nullptr;
+  RTCDevice device = nullptr;
+  RTCScene rtcScene = nullptr;
+  float rayEpsilon = 1e-6f;
+
+  std::vector<glm::vec3> normals;  // unit geometric normal per triangle (front side); zero if degenerate
+  std::vector<float> areas;        // per triangle, m^2
+  std::vector<double> areaCdf;     // inclusive prefix sums of areas (for area-weighted surface points)
+  double totalArea = 0.0;
+
+  // Emissive triangles, chosen with probability proportional to power = luminance(Le) x area x pi.
+  std::vector<uint32_t> emissive;      // triangle indices
+  std::vector<double> emissiveCdf;     // inclusive prefix sums of power, normalised to end at 1
+  std::vector<float> emissivePdfArea;  // per triangle (all triangles): P(choose it) / area, 0 if not emissive
+  double emissiveArea = 0.0;           // m^2
+  double emissivePower = 0.0;          // W (luminance-weighted)
+
+  const Material& material(uint32_t triangle) const {
+    return scene->materials[scene->triangleMaterial[triangle]];
+  }
+  void vertices(uint32_t triangle, glm::vec3& p0, glm::vec3& p1, glm::vec3& p2) const {
+    const glm::uvec3 t = scene->triangles[triangle];
+    p0 = scene->positions[t.x];
+    p1 = scene->positions[t.y];
+    p2 = scene->positions[t.z];
+  }
+  glm::vec3 pointOn(uint32_t triangle, float u, float v) const {
+    glm::vec3 p0, p1, p2;
+    vertices(triangle, p0, p1, p2);
+    return p0 * (1.0f - u - v) + p1 * u + p2 * v;
+  }
+};
+
+namespace bake_detail {
+
+// Sets flush-to-zero and denormals-are-zero for the current thread while alive, restoring the previous
+// mode afterwards (Embree's recommendation for tracing threads; also keeps results independent of which
+// thread runs an item).
+class DenormalScope {
+ public:
+#ifdef TETRAPROBE_BAKE_HAS_MXCSR
+  DenormalScope() : saved_(_mm_getcsr()) {
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+  }
+  ~DenormalScope() {
+    _mm_setcsr(saved_);
+  }
+
+ private:
+  unsigned int saved_;
+#else
+  DenormalScope() = default;
+#endif
+  DenormalScope(const DenormalScope&) = delete;
+  DenormalScope& operator=(const DenormalScope&) = delete;
+};
+
+}  // namespace bake_detail
+}  // namespace tetraprobe
