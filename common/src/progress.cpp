@@ -8,19 +8,26 @@
 
 namespace tetraprobe {
 
-bool Progress::enabled() { return ::isatty(STDERR_FILENO) && std::getenv("TETRAPROBE_NO_PROGRESS") == nullptr; }
+bool Progress::enabled() {
+  return ::isatty(STDERR_FILENO) && std::getenv("TETRAPROBE_NO_PROGRESS") == nullptr;
+}
 
 Progress::Progress(std::string label, uint64_t total, std::string unit)
-    : label_(std::move(label)), unit_(std::move(unit)), total_(total), start_(std::chrono::steady_clock::now()),
+    : label_(std::move(label)),
+      unit_(std::move(unit)),
+      total_(total),
+      start_(std::chrono::steady_clock::now()),
       enabled_(enabled()) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() {
+  finish();
+}
 
 void Progress::advance(uint64_t n) {
   const uint64_t done = done_.fetch_add(n, std::memory_order_relaxed) + n;
   if (!enabled_) return;
-  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                          std::chrono::steady_clock::now() - start_).count();
+  const int64_t now =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start_).count();
   int64_t last = lastDrawNs_.load(std::memory_order_relaxed);
   if (now - last < 100'000'000 && done < total_) return;
   if (!lastDrawNs_.compare_exchange_strong(last, now)) return;

@@ -18,7 +18,9 @@ namespace {
 
 constexpr double kFloor = 0.01;  // W/m^2, see evaluate.h
 
-double luminance(const glm::vec3& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
+double luminance(const glm::vec3& c) {
+  return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+}
 
 uint64_t mix(uint64_t x) {  // SplitMix64 finaliser: per-point seeds independent of thread count
   x += 0x9e3779b97f4a7c15ull;
@@ -44,15 +46,16 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
   Progress progress("reference", surface.size(), "points");
   parallelFor(surface.size(), options.threads, [&](size_t i) {
     report.points[i].surface = surface[i];
-    report.points[i].reference = referenceIrradiance(tracer, surface[i].position, surface[i].normal,
-                                                     options.samplesPerPoint, mix(options.seed ^ mix(i)), bake);
+    report.points[i].reference =
+        referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
+                            mix(options.seed ^ mix(i)), bake);
     if (options.progress) progress.advance();
   });
   progress.finish();
   double sum = 0.0;
   for (const auto& p : report.points)
-    sum += luminance(p.reference.stderror) / std::sqrt(luminance(p.reference.irradiance) *
-                                                           luminance(p.reference.irradiance) + kFloor);
+    sum += luminance(p.reference.stderror) /
+           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
   report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
   report.referenceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

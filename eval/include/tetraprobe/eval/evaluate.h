@@ -5,7 +5,8 @@
 //   relmse         = mean over p,c of (x - r)^2 / (r^2 + 0.01)
 //   rel error(p)   = mean over c of |x - r| / sqrt(r^2 + 0.01)
 //   mean_rel_error = mean over p of rel error(p);  p95_rel_error = its 95th percentile
-//   leak           = mean over p of max(0, lum(x) - lum(r)) / max(lum(r), 0.01)   (light that should not be there)
+//   leak           = mean over p of max(0, lum(x) - lum(r)) / max(lum(r), 0.01)   (light that should not be
+//   there)
 // The 0.01 W/m^2 floor keeps near-black points from dominating; it is ~1e-4 of a lit room's irradiance.
 #pragma once
 
@@ -22,9 +23,9 @@
 namespace tetraprobe {
 
 struct EvalOptions {
-  int points = 512;              // surface points
-  int samplesPerPoint = 4096;    // reference paths per point
-  int referenceBounces = 8;      // reference path depth (converged ground truth, not the bake's depth)
+  int points = 512;            // surface points
+  int samplesPerPoint = 4096;  // reference paths per point
+  int referenceBounces = 8;    // reference path depth (converged ground truth, not the bake's depth)
   uint64_t seed = 0x5eed0e7a1ull;
   int threads = 0;
   bool progress = true;
@@ -36,9 +37,9 @@ struct MethodResult {
   double meanRelError = 0.0;
   double p95RelError = 0.0;
   double leak = 0.0;
-  double cpuNsPerQuery = 0.0;    // single thread, median of repeated timed passes over all points
-  uint64_t bytes = 0;            // data the method needs at run time
-  std::vector<glm::vec3> values; // per-point lookups (same order as EvalReport::points)
+  double cpuNsPerQuery = 0.0;     // single thread, median of repeated timed passes over all points
+  uint64_t bytes = 0;             // data the method needs at run time
+  std::vector<glm::vec3> values;  // per-point lookups (same order as EvalReport::points)
 };
 
 struct EvalPoint {
@@ -49,7 +50,7 @@ struct EvalPoint {
 struct EvalReport {
   int samplesPerPoint = 0;
   int referenceBounces = 0;
-  double meanRelStderr = 0.0;    // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
+  double meanRelStderr = 0.0;  // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
   double referenceSeconds = 0.0;
   std::vector<EvalPoint> points;
   std::vector<MethodResult> methods;
