@@ -1,0 +1,449 @@
+// glTF 2.0 loader (.gltf with external or data-URI buffers, .glb) on top of tinygltf. Parse with tinygltf
+// (images kept encoded; only base-colour and emissive images are decoded, once each), then walk the node
+// hierarchy of the default scene (else all root nodes) with cycle and depth guards, checking every accessor
+// against its buffer before reading it. Triangles, strips and fans are read (indexed or not); points and
+// lines are skipped with a warning; negative-determinant transforms flip the winding, as the spec requires.
+// Materials: albedo = baseColorFactor x mean linear base-colour texture; emission = emissiveFactor x
+// KHR_materials_emissive_strength x mean linear emissive texture. KHR_lights_punctual values are taken as
+// radiometric (cd -> W/sr, lux -> W/m^2) and emissive nits as W/(m^2 sr), so an OBJ and a glTF export of
+// the same level agree (docs/scene_format.md). Perspective cameras become named Camera entries.
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/trigonometric.hpp>
+
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#endif
+#include <tiny_gltf.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
+#include "loaders.h"
+#include "tetraprobe/common/error.h"
+
+namespace tetraprobe::detail {
+
+namespace {
+
+constexpr int kMaxNodeDepth = 256;
+constexpr size_t kMaxNodeVisits = 1u << 22;
+
+// Image callback: keep the encoded bytes; decoding happens only for images a material uses.
+bool keepEncodedImage(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  image->as_is = true;
+  if (size > 0) image->image.assign(bytes, bytes + size);
+  return true;
+}
+
+struct Context {
+  const tinygltf::Model& model;
+  const std::string& path;
+  Scene& scene;
+  std::vector<uint32_t> materialMap;  // glTF material -> Scene material
+  uint32_t defaultMaterial = UINT32_MAX;
+  std::map<int, std::optional<glm::vec3>> imageMeans;
+  std::vector<int> onPath;  // nodes on the current root-to-node path (cycle guard)
+  size_t skippedPrimitives = 0;
+  size_t visits = 0;  // node instances visited (guards against exponential DAG instancing)
+};
+
+[[noreturn]] void fail(const Context& ctx, const std::string& what) {
+  throw InputError(ctx.path + ": " + what);
+}
+
+// Byte span of accessor `index`, validated against its buffer view and buffer.
+struct AccessorView {
+  const unsigned char* data = nullptr;
+  size_t count = 0;
+  size_t stride = 0;
+  int componentType = 0;
+  int components = 0;
+  bool normalized = false;
+};
+
+AccessorView viewAccessor(const Context& ctx, int index, const char* what) {
+  const auto& m = ctx.model;
+  if (index < 0 || static_cast<size_t>(index) >= m.accessors.size())
+    fail(ctx, std::string(what) + " accessor " + std::to_string(index) + " out of range");
+  const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(index)];
+  const std::string name = std::string(what) + " accessor " + std::to_string(index);
+  const int compSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+  const int comps = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
+  if (compSize <= 0 || comps <= 0) fail(ctx, name + ": bad component type or element type");
+  if (a.sparse.isSparse) fail(ctx, name + ": sparse accessors are not supported");
+  AccessorView v;
+  v.count = a.count;
+  v.componentType = a.componentType;
+  v.components = comps;
+  v.normalized = a.normalized;
+  const size_t elemSize = static_cast<size_t>(compSize) * static_cast<size_t>(comps);
+  if (a.count == 0) return v;
+  if (a.bufferView < 0 || static_cast<size_t>(a.bufferView) >= m.bufferViews.size())
+    fail(ctx, name + ": buffer view " + std::to_string(a.bufferView) + " out of range");
+  const tinygltf::BufferView& bv = m.bufferViews[static_cast<size_t>(a.bufferView)];
+  if (bv.buffer < 0 || static_cast<size_t>(bv.buffer) >= m.buffers.size())
+    fail(ctx, name + ": buffer " + std::to_string(bv.buffer) + " out of range");
+  const tinygltf::Buffer& buf = m.buffers[static_cast<size_t>(bv.buffer)];
+  if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset)
+    fail(ctx, name + ": buffer view exceeds its buffer (" + std::to_string(buf.data.size()) + " bytes)");
+  v.stride = bv.byteStride != 0 ? bv.byteStride : elemSize;
+  if (v.stride < elemSize) fail(ctx, name + ": byte stride smaller than an element");
+  // Last byte read: byteOffset + stride * (count - 1) + elemSize, all within the view (overflow-safe).
+  const size_t span = bv.byteLength;
+  if (a.byteOffset > span || elemSize > span - a.byteOffset ||
+      (a.count - 1) > (span - a.byteOffset - elemSize) / v.stride)
+    fail(ctx, name + ": " + std::to_string(a.count) + " elements exceed buffer view of " +
+                  std::to_string(span) + " bytes");
+  v.data = buf.data.data() + bv.byteOffset + a.byteOffset;
+  return v;
+}
+
+std::vector<glm::vec3> readPositions(const Context& ctx, int index) {
+  const AccessorView v = viewAccessor(ctx, index, "POSITION");
+  if (v.components != 3 || v.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT)
+    fail(ctx, "POSITION accessor " + std::to_string(index) + " is not float VEC3");
+  std::vector<glm::vec3> out(v.count);
+  for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, sizeof(float) * 3);
+  return out;
+}
+
+std::vector<uint32_t> readIndices(const Context& ctx, int index) {
+  const AccessorView v = viewAccessor(ctx, index, "index");
+  if (v.components != 1) fail(ctx, "index accessor " + std::to_string(index) + " is not SCALAR");
+  std::vector<uint32_t> out(v.count);
+  for (size_t i = 0; i < v.count; ++i) {
+    const unsigned char* p = v.data + i * v.stride;
+    switch (v.componentType) {
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        out[i] = p[0];
+        break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t x;
+        std::memcpy(&x, p, 2);
+        out[i] = x;
+        break;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        std::memcpy(&out[i], p, 4);
+        break;
+      default:
+        fail(ctx, "index accessor " + std::to_string(index) + " has a non-unsigned component type");
+    }
+  }
+  return out;
+}
+
+glm::dmat4 localMatrix(const Context& ctx, const tinygltf::Node& n, int index) {
+  if (!n.matrix.empty()) {
+    if (n.matrix.size() != 16) fail(ctx, "node " + std::to_string(index) + ": matrix needs 16 numbers");
+    return glm::make_mat4(n.matrix.data());  // glTF and GLM are both column-major
+  }
+  glm::dmat4 t(1.0), r(1.0), s(1.0);
+  if (!n.translation.empty()) {
+    if (n.translation.size() != 3)
+      fail(ctx, "node " + std::to_string(index) + ": translation needs 3 numbers");
+    t[3] = glm::dvec4(n.translation[0], n.translation[1], n.translation[2], 1.0);
+  }
+  if (!n.rotation.empty()) {
+    if (n.rotation.size() != 4) fail(ctx, "node " + std::to_string(index) + ": rotation needs 4 numbers");
+    glm::dquat q(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);  // glTF stores x, y, z, w
+    const double len = glm::length(q);
+    if (!(len > 0.0)) fail(ctx, "node " + std::to_string(index) + ": zero rotation quaternion");
+    r = glm::mat4_cast(q / len);
+  }
+  if (!n.scale.empty()) {
+    if (n.scale.size() != 3) fail(ctx, "node " + std::to_string(index) + ": scale needs 3 numbers");
+    s[0][0] = n.scale[0];
+    s[1][1] = n.scale[1];
+    s[2][2] = n.scale[2];
+  }
+  return t * r * s;
+}
+
+glm::vec3 rgb(const std::vector<double>& v, double fallback) {
+  return glm::vec3(static_cast<float>(v.size() > 0 ? v[0] : fallback),
+                   static_cast<float>(v.size() > 1 ? v[1] : fallback),
+                   static_cast<float>(v.size() > 2 ? v[2] : fallback));
+}
+
+// Mean linear colour of texture `textureIndex`, nullopt (+ warning) when it cannot be had.
+std::optional<glm::vec3> textureMean(Context& ctx, int textureIndex, const std::string& material) {
+  const auto& m = ctx.model;
+  if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= m.textures.size()) {
+    ctx.scene.warnings.push_back(ctx.path + ": material '" + material + "': texture " +
+                                 std::to_string(textureIndex) + " out of range");
+    return std::nullopt;
+  }
+  const int source = m.textures[static_cast<size_t>(textureIndex)].source;
+  if (source < 0 || static_cast<size_t>(source) >= m.images.size()) {
+    ctx.scene.warnings.push_back(ctx.path + ": material '" + material + "': texture without a usable image");
+    return std::nullopt;
+  }
+  auto it = ctx.imageMeans.find(source);
+  if (it != ctx.imageMeans.end()) return it->second;
+  const tinygltf::Image& img = m.images[static_cast<size_t>(source)];
+  std::optional<glm::vec3> mean;
+  std::string error;
+  if (!img.image.empty()) {
+    mean = meanLinearColor(img.image.data(), img.image.size(), error);
+  } else if (!img.uri.empty()) {
+    // tinygltf could not read it as given; retry forgivingly (backslashes, case).
+    const std::filesystem::path dir = std::filesystem::path(ctx.path).parent_path();
+    if (auto file = resolveTexturePath(dir, img.uri)) {
+      mean = meanLinearColorFile(*file, error);
+    } else {
+      error = "image '" + img.uri + "' not found";
+    }
+  } else {
+    error = "image " + std::to_string(source) + " has no data";
+  }
+  if (!mean) ctx.scene.warnings.push_back(ctx.path + ": material '" + material + "': " + error);
+  ctx.imageMeans.emplace(source, mean);
+  return mean;
+}
+
+void convertMaterials(Context& ctx) {
+  const auto& m = ctx.model;
+  ctx.materialMap.resize(m.materials.size());
+  for (size_t i = 0; i < m.materials.size(); ++i) {
+    const tinygltf::Material& gm = m.materials[i];
+    Material out;
+    out.name = gm.name.empty() ? "material_" + std::to_string(i) : gm.name;
+    const auto& pbr = gm.pbrMetallicRoughness;
+    out.albedo = rgb(pbr.baseColorFactor, 1.0);
+    if (pbr.baseColorTexture.index >= 0) {
+      if (auto mean = textureMean(ctx, pbr.baseColorTexture.index, out.name)) out.albedo *= *mean;
+    }
+    out.emission = rgb(gm.emissiveFactor, 0.0);
+    auto ext = gm.extensions.find("KHR_materials_emissive_strength");
+    if (ext != gm.extensions.end() && ext->second.Has("emissiveStrength")) {
+      const tinygltf::Value& s = ext->second.Get("emissiveStrength");
+      if (s.IsNumber()) out.emission *= static_cast<float>(s.GetNumberAsDouble());
+    }
+    if (gm.emissiveTexture.index >= 0 && out.emission != glm::vec3(0.0f)) {
+      if (auto mean = textureMean(ctx, gm.emissiveTexture.index, out.name)) out.emission *= *mean;
+    }
+    ctx.materialMap[i] = static_cast<uint32_t>(ctx.scene.materials.size());
+    ctx.scene.materials.push_back(out);
+  }
+}
+
+uint32_t sceneMaterial(Context& ctx, int gltfMaterial) {
+  if (gltfMaterial >= 0 && static_cast<size_t>(gltfMaterial) < ctx.materialMap.size())
+    return ctx.materialMap[static_cast<size_t>(gltfMaterial)];
+  if (gltfMaterial >= 0)
+    ctx.scene.warnings.push_back(ctx.path + ": material " + std::to_string(gltfMaterial) +
+                                 " out of range; using default");
+  if (ctx.defaultMaterial == UINT32_MAX) {
+    ctx.defaultMaterial = static_cast<uint32_t>(ctx.scene.materials.size());
+    ctx.scene.materials.push_back(Material{"default", glm::vec3(0.8f), glm::vec3(0.0f)});
+  }
+  return ctx.defaultMaterial;
+}
+
+void addPrimitive(Context& ctx, const tinygltf::Primitive& prim, const glm::dmat4& world, size_t meshIndex) {
+  const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+  if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+      mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+    ++ctx.skippedPrimitives;
+    return;
+  }
+  auto pos = prim.attributes.find("POSITION");
+  if (pos == prim.attributes.end()) {
+    ctx.scene.warnings.push_back(ctx.path + ": mesh " + std::to_string(meshIndex) +
+                                 ": primitive without POSITION skipped");
+    return;
+  }
+  const std::vector<glm::vec3> local = readPositions(ctx, pos->second);
+  std::vector<uint32_t> indices;
+  if (prim.indices >= 0) {
+    indices = readIndices(ctx, prim.indices);
+    for (uint32_t i : indices) {
+      if (i >= local.size())
+        fail(ctx, "mesh " + std::to_string(meshIndex) + ": vertex index " + std::to_string(i) +
+                      " out of range (" + std::to_string(local.size()) + " vertices)");
+    }
+  } else {
+    indices.resize(local.size());
+    for (size_t i = 0; i < local.size(); ++i) indices[i] = static_cast<uint32_t>(i);
+  }
+
+  const uint32_t base = static_cast<uint32_t>(ctx.scene.positions.size());
+  if (ctx.scene.positions.size() + local.size() > UINT32_MAX) fail(ctx, "more than 2^32 vertices");
+  for (const glm::vec3& p : local) {
+    const glm::dvec4 w = world * glm::dvec4(glm::dvec3(p), 1.0);
+    ctx.scene.positions.emplace_back(static_cast<float>(w.x), static_cast<float>(w.y),
+                                     static_cast<float>(w.z));
+  }
+  const bool flip = glm::determinant(glm::dmat3(world)) < 0.0;
+  const uint32_t material = sceneMaterial(ctx, prim.material);
+  auto emit = [&](uint32_t a, uint32_t b, uint32_t c) {
+    if (flip) std::swap(b, c);
+    ctx.scene.triangles.emplace_back(base + a, base + b, base + c);
+    ctx.scene.triangleMaterial.push_back(material);
+  };
+  const size_t n = indices.size();
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
+    if (n % 3 != 0)
+      ctx.scene.warnings.push_back(ctx.path + ": mesh " + std::to_string(meshIndex) +
+                                   ": index count not a multiple of 3; trailing indices ignored");
+    for (size_t i = 0; i + 2 < n; i += 3) emit(indices[i], indices[i + 1], indices[i + 2]);
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+    for (size_t i = 0; i + 2 < n; ++i) {
+      if (i % 2 == 0)
+        emit(indices[i], indices[i + 1], indices[i + 2]);
+      else
+        emit(indices[i + 1], indices[i], indices[i + 2]);
+    }
+  } else {
+    for (size_t i = 1; i + 1 < n; ++i) emit(indices[0], indices[i], indices[i + 1]);
+  }
+}
+
+void addLight(Context& ctx, const tinygltf::Node& node, const glm::dmat4& world) {
+  auto ext = node.extensions.find("KHR_lights_punctual");
+  if (ext == node.extensions.end() || !ext->second.Has("light")) return;
+  const tinygltf::Value& li = ext->second.Get("light");
+  if (!li.IsInt() || li.Get<int>() < 0 || static_cast<size_t>(li.Get<int>()) >= ctx.model.lights.size())
+    fail(ctx, "node '" + node.name + "': KHR_lights_punctual light index out of range");
+  const tinygltf::Light& gl = ctx.model.lights[static_cast<size_t>(li.Get<int>())];
+  Light out;
+  out.intensity = rgb(gl.color, 1.0) * static_cast<float>(gl.intensity);
+  const glm::dvec4 p = world * glm::dvec4(0, 0, 0, 1);
+  out.position = glm::vec3(p);
+  const glm::dvec3 d = glm::dmat3(world) * glm::dvec3(0, 0, -1);
+  const double len = glm::length(d);
+  out.direction = len > 0.0 ? glm::vec3(d / len) : glm::vec3(0, 0, -1);
+  if (gl.type == "point") {
+    out.type = LightType::kPoint;
+  } else if (gl.type == "spot") {
+    out.type = LightType::kSpot;
+    out.innerConeRad = static_cast<float>(gl.spot.innerConeAngle);
+    out.outerConeRad = static_cast<float>(gl.spot.outerConeAngle);
+  } else if (gl.type == "directional") {
+    out.type = LightType::kDirectional;
+  } else {
+    ctx.scene.warnings.push_back(ctx.path + ": light '" + gl.name + "' has unknown type '" + gl.type +
+                                 "'; skipped");
+    return;
+  }
+  ctx.scene.lights.push_back(out);
+}
+
+void addCamera(Context& ctx, const tinygltf::Node& node, const glm::dmat4& world) {
+  if (node.camera < 0) return;
+  if (static_cast<size_t>(node.camera) >= ctx.model.cameras.size())
+    fail(ctx, "node '" + node.name + "': camera " + std::to_string(node.camera) + " out of range");
+  const tinygltf::Camera& gc = ctx.model.cameras[static_cast<size_t>(node.camera)];
+  if (gc.type != "perspective") {
+    ctx.scene.warnings.push_back(ctx.path + ": camera '" + gc.name + "' is not perspective; skipped");
+    return;
+  }
+  Camera out;
+  out.name = !gc.name.empty()     ? gc.name
+             : !node.name.empty() ? node.name
+                                  : "camera_" + std::to_string(node.camera);
+  out.eye = glm::vec3(world * glm::dvec4(0, 0, 0, 1));
+  const glm::dvec3 fwd = glm::dmat3(world) * glm::dvec3(0, 0, -1);
+  const glm::dvec3 up = glm::dmat3(world) * glm::dvec3(0, 1, 0);
+  if (glm::length(fwd) > 0.0) out.target = out.eye + glm::vec3(glm::normalize(fwd));
+  if (glm::length(up) > 0.0) out.up = glm::vec3(glm::normalize(up));
+  if (gc.perspective.yfov > 0.0) out.fovYDeg = static_cast<float>(glm::degrees(gc.perspective.yfov));
+  ctx.scene.cameras.push_back(out);
+}
+
+void visitNode(Context& ctx, int index, const glm::dmat4& parent) {
+  const auto& m = ctx.model;
+  if (index < 0 || static_cast<size_t>(index) >= m.nodes.size())
+    fail(ctx, "node " + std::to_string(index) + " out of range");
+  for (int n : ctx.onPath) {
+    if (n == index)
+      fail(ctx, "node " + std::to_string(index) + " is its own ancestor (cycle in the node tree)");
+  }
+  if (ctx.onPath.size() >= static_cast<size_t>(kMaxNodeDepth)) fail(ctx, "node tree deeper than 256 levels");
+  if (++ctx.visits > kMaxNodeVisits) fail(ctx, "node tree instances more than 4M nodes");
+  const tinygltf::Node& node = m.nodes[static_cast<size_t>(index)];
+  const glm::dmat4 world = parent * localMatrix(ctx, node, index);
+  if (node.mesh >= 0) {
+    if (static_cast<size_t>(node.mesh) >= m.meshes.size())
+      fail(ctx, "node " + std::to_string(index) + ": mesh " + std::to_string(node.mesh) + " out of range");
+    for (const auto& prim : m.meshes[static_cast<size_t>(node.mesh)].primitives)
+      addPrimitive(ctx, prim, world, static_cast<size_t>(node.mesh));
+  }
+  addLight(ctx, node, world);
+  addCamera(ctx, node, world);
+  ctx.onPath.push_back(index);
+  for (int child : node.children) visitNode(ctx, child, world);
+  ctx.onPath.pop_back();
+}
+
+}  // namespace
+
+Scene loadGltf(const std::string& path) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keepEncodedImage, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  const bool binary = path.size() >= 4 && (path.compare(path.size() - 4, 4, ".glb") == 0 ||
+                                           path.compare(path.size() - 4, 4, ".GLB") == 0);
+  const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
+                         : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+  if (!ok) {
+    std::string first = err.substr(0, err.find('\n'));
+    while (!first.empty() && (first.back() == '\r' || first.back() == ' ')) first.pop_back();
+    throw InputError(path + ": " + (first.empty() ? "cannot parse glTF" : first));
+  }
+  Scene scene;
+  {
+    std::string line;
+    for (char c : warn) {
+      if (c == '\n') {
+        if (!line.empty()) scene.warnings.push_back(path + ": " + line);
+        line.clear();
+      } else {
+        line += c;
+      }
+    }
+    if (!line.empty()) scene.warnings.push_back(path + ": " + line);
+  }
+
+  Context ctx{model, path, scene, {}, UINT32_MAX, {}, {}, 0, 0};
+  convertMaterials(ctx);
+
+  std::vector<int> roots;
+  int sceneIndex = model.defaultScene;
+  if (sceneIndex < 0 && !model.scenes.empty()) sceneIndex = 0;
+  if (sceneIndex >= 0 && static_cast<size_t>(sceneIndex) < model.scenes.size()) {
+    roots = model.scenes[static_cast<size_t>(sceneIndex)].nodes;
+  } else {
+    std::vector<bool> isChild(model.nodes.size(), false);
+    for (const auto& n : model.nodes) {
+      for (int c : n.children) {
+        if (c >= 0 && static_cast<size_t>(c) < isChild.size()) isChild[static_cast<size_t>(c)] = true;
+      }
+    }
+    for (size_t i = 0; i < model.nodes.size(); ++i) {
+      if (!isChild[i]) roots.push_back(static_cast<int>(i));
+    }
+  }
+  for (int r : roots) visitNode(ctx, r, glm::dmat4(1.0));
+  if (ctx.skippedPrimitives > 0)
+    scene.warnings.push_back(path + ": skipped " + std::to_string(ctx.skippedPrimitives) +
+                             " point/line primitive" + (ctx.skippedPrimitives == 1 ? "" : "s"));
+  return scene;
+}
+
+}  // namespace tetraprobe::detail

@@ -1,0 +1,198 @@
+// Wavefront OBJ + MTL loader. Parse: a line-numbered pre-scan of the OBJ checks what tinyobjloader would
+// silently accept or skip (non-finite or missing vertex coordinates, face indices that are zero or out of
+// range), then tinyobjloader reads and triangulates polygons. Materials: Kd (x the mean linear colour of
+// map_Kd, as the MTL specification multiplies them) -> albedo; Ke (x the mean of map_Ke) -> emitted radiance
+// in W/(m^2 sr) taken as is. A missing MTL or image is a warning. Texture means are computed once per file.
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tiny_obj_loader.h>
+
+#include "loaders.h"
+#include "tetraprobe/common/error.h"
+
+namespace tetraprobe::detail {
+
+namespace {
+
+// Pre-scan: throws InputError "<path>: line N: <problem>" for bad vertices and face indices.
+void prescanObj(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open file");
+  std::string line;
+  size_t lineNo = 0;
+  long long vertices = 0;
+  long long maxIndex = 0;
+  size_t maxIndexLine = 0;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    size_t i = line.find_first_not_of(" \t");
+    if (i == std::string::npos || i + 1 >= line.size()) continue;
+    const char kind = line[i];
+    if ((kind != 'v' && kind != 'f') || (line[i + 1] != ' ' && line[i + 1] != '\t')) continue;
+    const char* p = line.c_str() + i + 2;
+    if (kind == 'v') {
+      for (int k = 0; k < 3; ++k) {
+        char* end = nullptr;
+        errno = 0;
+        const double x = std::strtod(p, &end);
+        if (end == p)
+          throw InputError(path + ": line " + std::to_string(lineNo) + ": vertex needs 3 coordinates");
+        if (!std::isfinite(x) || errno == ERANGE)
+          throw InputError(path + ": line " + std::to_string(lineNo) + ": vertex coordinate is not finite");
+        p = end;
+      }
+      ++vertices;
+      continue;
+    }
+    std::istringstream tokens(p);
+    std::string tok;
+    while (tokens >> tok) {
+      if (tok[0] == '#') break;
+      char* end = nullptr;
+      const long long idx = std::strtoll(tok.c_str(), &end, 10);
+      if (end == tok.c_str())
+        throw InputError(path + ": line " + std::to_string(lineNo) + ": malformed face index '" + tok + "'");
+      if (idx == 0)
+        throw InputError(path + ": line " + std::to_string(lineNo) + ": vertex index 0 is invalid");
+      if (idx < 0 && vertices + idx < 0)
+        throw InputError(path + ": line " + std::to_string(lineNo) + ": relative vertex index " +
+                         std::to_string(idx) + " out of range (" + std::to_string(vertices) +
+                         " vertices so far)");
+      if (idx > maxIndex) {
+        maxIndex = idx;
+        maxIndexLine = lineNo;
+      }
+    }
+  }
+  if (maxIndex > vertices)
+    throw InputError(path + ": line " + std::to_string(maxIndexLine) + ": vertex index " +
+                     std::to_string(maxIndex) + " out of range (" + std::to_string(vertices) + " vertices)");
+}
+
+// Mean linear colour of a texture named in the MTL, cached per resolved file. nullopt (+ warning) on failure.
+class TextureMeans {
+ public:
+  TextureMeans(std::filesystem::path baseDir, Scene& scene) : baseDir_(std::move(baseDir)), scene_(scene) {}
+
+  std::optional<glm::vec3> get(const std::string& name, const std::string& material) {
+    auto it = byName_.find(name);
+    if (it != byName_.end()) return it->second;
+    std::optional<glm::vec3> mean;
+    if (auto file = resolveTexturePath(baseDir_, name)) {
+      std::string error;
+      mean = meanLinearColorFile(*file, error);
+      if (!mean) scene_.warnings.push_back("material '" + material + "': texture " + error);
+    } else {
+      scene_.warnings.push_back("material '" + material + "': texture '" + name + "' not found under " +
+                                baseDir_.string());
+    }
+    byName_.emplace(name, mean);
+    return mean;
+  }
+
+ private:
+  std::filesystem::path baseDir_;
+  Scene& scene_;
+  std::map<std::string, std::optional<glm::vec3>> byName_;
+};
+
+void splitWarnings(const std::string& text, const std::string& path, Scene& scene) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (!line.empty() && line != ".") scene.warnings.push_back(path + ": " + line);
+  }
+}
+
+}  // namespace
+
+Scene loadObj(const std::string& path) {
+  prescanObj(path);
+
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  std::string mtlDir = dir.string();
+  if (!mtlDir.empty()) mtlDir += '/';
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> objMaterials;
+  std::string warn, err;
+  const bool ok = tinyobj::LoadObj(&attrib, &shapes, &objMaterials, &warn, &err, path.c_str(),
+                                   mtlDir.empty() ? nullptr : mtlDir.c_str(), /*triangulate=*/true);
+  Scene scene;
+  splitWarnings(warn, path, scene);
+  if (!ok) {
+    std::string first = err.substr(0, err.find('\n'));
+    throw InputError(path + ": " + (first.empty() ? "cannot parse OBJ" : first));
+  }
+  // tinyobjloader reports a missing or unreadable MTL in `err` but still succeeds.
+  splitWarnings(err, path, scene);
+
+  if (attrib.vertices.size() % 3 != 0) throw InputError(path + ": vertex array is not a multiple of 3");
+  scene.positions.resize(attrib.vertices.size() / 3);
+  for (size_t i = 0; i < scene.positions.size(); ++i)
+    scene.positions[i] =
+        glm::vec3(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
+
+  TextureMeans textures(dir, scene);
+  scene.materials.reserve(objMaterials.size() + 1);
+  for (const tinyobj::material_t& m : objMaterials) {
+    Material out;
+    out.name = m.name;
+    out.albedo = glm::vec3(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
+    out.emission = glm::vec3(m.emission[0], m.emission[1], m.emission[2]);
+    if (!m.diffuse_texname.empty()) {
+      if (auto mean = textures.get(m.diffuse_texname, m.name)) out.albedo *= *mean;
+    }
+    if (!m.emissive_texname.empty() && out.emission != glm::vec3(0.0f)) {
+      if (auto mean = textures.get(m.emissive_texname, m.name)) out.emission *= *mean;
+    }
+    scene.materials.push_back(out);
+  }
+  const uint32_t materialCount = static_cast<uint32_t>(scene.materials.size());
+  uint32_t defaultMaterial = UINT32_MAX;
+
+  size_t total = 0;
+  for (const auto& s : shapes) total += s.mesh.indices.size() / 3;
+  scene.triangles.reserve(total);
+  scene.triangleMaterial.reserve(total);
+  const size_t nv = scene.positions.size();
+  for (const tinyobj::shape_t& shape : shapes) {
+    const auto& idx = shape.mesh.indices;
+    const size_t faces = idx.size() / 3;
+    for (size_t f = 0; f < faces; ++f) {
+      glm::uvec3 tri;
+      for (int k = 0; k < 3; ++k) {
+        const int v = idx[3 * f + static_cast<size_t>(k)].vertex_index;
+        if (v < 0 || static_cast<size_t>(v) >= nv)
+          throw InputError(path + ": shape '" + shape.name + "': vertex index " + std::to_string(v + 1) +
+                           " out of range (" + std::to_string(nv) + " vertices)");
+        tri[k] = static_cast<uint32_t>(v);
+      }
+      const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+      uint32_t material;
+      if (mid >= 0 && static_cast<uint32_t>(mid) < materialCount) {
+        material = static_cast<uint32_t>(mid);
+      } else {
+        if (defaultMaterial == UINT32_MAX) {
+          defaultMaterial = static_cast<uint32_t>(scene.materials.size());
+          scene.materials.push_back(Material{"default", glm::vec3(0.8f), glm::vec3(0.0f)});
+        }
+        material = defaultMaterial;
+      }
+      scene.triangles.push_back(tri);
+      scene.triangleMaterial.push_back(material);
+    }
+  }
+  return scene;
+}
+
+}  // namespace tetraprobe::detail

@@ -1,0 +1,40 @@
+// Internal interface between the scene loaders: one loader per file format, plus the shared validation pass
+// and the texture helpers. Not installed; only scene/src includes it.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/scene/scene.h"
+
+namespace tetraprobe::detail {
+
+// Each loader fills positions/triangles/materials/lights/cameras of a fresh Scene and throws InputError
+// ("<path>: <problem>") for malformed input. They do not run validateScene(); loadScene() does.
+Scene loadObj(const std::string& path);
+Scene loadGltf(const std::string& path);
+Scene loadSceneJson(const std::string& path);
+
+// Shared validation: throws InputError naming `path` for NaN/Inf positions, out-of-range indices or
+// material ids, or zero triangles; drops zero-area triangles and records their count in scene.warnings.
+void validateScene(Scene& scene, const std::string& path);
+
+// Mean linear RGB of an encoded image (PNG, JPEG, TGA, BMP, PSD, GIF, HDR, PIC, PNM). 8- and 16-bit images
+// are taken as sRGB-encoded and decoded per texel before averaging; Radiance .hdr is already linear. Alpha is
+// ignored (every texel counts equally). Returns nullopt and sets `error` when the bytes cannot be decoded.
+std::optional<glm::vec3> meanLinearColor(const unsigned char* bytes, std::size_t size, std::string& error);
+std::optional<glm::vec3> meanLinearColorFile(const std::filesystem::path& file, std::string& error);
+
+// IEC 61966-2-1 sRGB transfer function, encoded value in [0,1] -> linear.
+float srgbToLinear(float encoded);
+
+// Finds a texture named in a material file, forgivingly: as given (relative to baseDir unless absolute), then
+// with '\\' turned into '/', then matching each path component case-insensitively. nullopt if none exists.
+std::optional<std::filesystem::path> resolveTexturePath(const std::filesystem::path& baseDir,
+                                                        const std::string& name);
+
+}  // namespace tetraprobe::detail
