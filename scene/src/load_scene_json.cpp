@@ -141,9 +141,9 @@ void readCamera(const Reader& r, const json& j, const std::string& key, float sc
   r.checkKeys(j, key, {"name", "eye", "target", "up", "fov_deg"});
   Camera c;
   if (!j.contains("name")) r.fail(key + ".name", "missing");
+  c.name = r.string(j["name"], key + ".name");
   if (!j.contains("eye")) r.fail(key + ".eye", "missing");
   if (!j.contains("target")) r.fail(key + ".target", "missing");
-  c.name = r.string(j["name"], key + ".name");
   c.eye = r.vec3(j["eye"], key + ".eye") * scale;
   c.target = r.vec3(j["target"], key + ".target") * scale;
   if (j.contains("up")) c.up = r.direction(j["up"], key + ".up");
