@@ -1,0 +1,208 @@
+// bakeProbes: furnace radiance, content flags, analytic punctual deltas and thread-count determinism.
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "test_scenes.h"
+#include "tetraprobe/bake/bake.h"
+
+namespace tetraprobe {
+namespace {
+
+BakeOptions quiet(int bounces, int samples, uint32_t content = kContentDefault) {
+  BakeOptions o;
+  o.bounces = bounces;
+  o.samplesPerProbe = samples;
+  o.content = content;
+  o.progress = false;
+  o.threads = 2;
+  return o;
+}
+
+// Mean and standard error over probes of one coefficient/channel.
+struct Stat {
+  double mean = 0, se = 0;
+};
+Stat statOf(const std::vector<ShRgb>& sh, int coeff, int ch) {
+  double s = 0, s2 = 0;
+  const double n = double(sh.size());
+  for (const ShRgb& p : sh) {
+    s += p.c[coeff][ch];
+    s2 += double(p.c[coeff][ch]) * p.c[coeff][ch];
+  }
+  Stat st;
+  st.mean = s / n;
+  st.se = std::sqrt(std::max(0.0, (s2 - s * s / n) / (n - 1)) / n);
+  return st;
+}
+
+// The white furnace: inside a closed sphere of albedo a and emission Le, radiance is Le sum_{k<=B} a^k in
+// every direction at every point, for B bounces. It pins the bounce count, the NEE + MIS weights (any double
+// counting or missing weight shifts the mean), Russian roulette (unbiased) and the 4 pi / N projection.
+// Tolerance: 4 standard errors over 24 probes + 2e-4 relative (float radiance, Fibonacci quadrature).
+TEST(WhiteFurnace, ProbeRadianceIsGeometricSeriesOfAlbedo) {
+  Scene s;
+  const float a = 0.5f;
+  const glm::vec3 le(1.0f, 2.0f, 0.5f);
+  const uint32_t m = test::addMaterial(s, glm::vec3(a), le);
+  test::addSphere(s, glm::vec3(0.0f), 1.0f, true, m);
+  SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes;
+  for (int i = 0; i < 24; ++i)
+    probes.push_back(0.5 * glm::dvec3(std::sin(i * 1.3), std::cos(i * 2.1), std::sin(i * 0.7 + 1.0)) / 1.8);
+  for (int bounces : {0, 1, 3}) {
+    double series = 0;
+    for (int k = 0; k <= bounces; ++k) series += std::pow(a, k);
+    const std::vector<ShRgb> sh = bakeProbes(tracer, probes, quiet(bounces, 512));
+    for (int ch = 0; ch < 3; ++ch) {
+      const double exact = le[ch] * series * std::sqrt(4.0 * std::numbers::pi);
+      const Stat l00 = statOf(sh, 0, ch);
+      EXPECT_NEAR(l00.mean, exact, 4 * l00.se + 2e-4 * exact) << "bounces " << bounces << " channel " << ch;
+      for (int i = 1; i < kShCoeffCount; ++i) {
+        const Stat c = statOf(sh, i, ch);
+        EXPECT_NEAR(c.mean, 0.0, 4 * c.se + 2e-3 * exact) << "bounces " << bounces << " coefficient " << i;
+      }
+    }
+  }
+}
+
+// An open room: emissive walls, a point light, a gradient sky through the missing ceiling.
+Scene openRoom() {
+  Scene s;
+  const uint32_t wall = test::addMaterial(s, glm::vec3(0.6f, 0.5f, 0.4f));
+  const uint32_t glow = test::addMaterial(s, glm::vec3(0.5f), glm::vec3(2.0f, 1.0f, 0.5f));
+  test::addBox(s, {-2, 0, -2}, {2, 3, 2}, true, wall, 2);
+  // Remove the ceiling (face 3, 8 triangles with n = 2) so the sky is visible.
+  s.triangles.erase(s.triangles.begin() + 24, s.triangles.begin() + 32);
+  s.triangleMaterial.erase(s.triangleMaterial.begin() + 24, s.triangleMaterial.begin() + 32);
+  test::addQuad(s, {-1.9f, 0.5f, -0.5f}, {-1.9f, 0.5f, 0.5f}, {-1.9f, 1.5f, 0.5f}, {-1.9f, 1.5f, -0.5f},
+                glow);
+  Light point;
+  point.position = {1.0f, 2.0f, 0.5f};
+  point.intensity = {5.0f, 5.0f, 4.0f};
+  s.lights.push_back(point);
+  Light sun;
+  sun.type = LightType::kDirectional;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+  sun.intensity = {3.0f, 3.0f, 2.5f};
+  sun.angularRadiusRad = 0.02f;
+  s.lights.push_back(sun);
+  s.skyRadiance = {0.3f, 0.5f, 1.0f};
+  s.skyHorizonRadiance = {0.8f, 0.8f, 0.7f};
+  return s;
+}
+
+std::vector<glm::dvec3> roomProbes() {
+  std::vector<glm::dvec3> p;
+  for (int i = 0; i < 9; ++i) p.push_back({-1.5 + 0.37 * i, 0.4 + 0.3 * i, 1.2 - 0.29 * i});
+  return p;
+}
+
+// Same seed, any thread count: bit-identical output (the bake must be reproducible on any machine size).
+TEST(Determinism, BakeIsBitIdenticalForAnyThreadCount) {
+  const Scene s = openRoom();
+  SceneTracer tracer(s);
+  BakeOptions o = quiet(3, 64, kContentAll);
+  o.threads = 1;
+  const std::vector<ShRgb> one = bakeProbes(tracer, roomProbes(), o);
+  o.threads = 2;
+  const std::vector<ShRgb> two = bakeProbes(tracer, roomProbes(), o);
+  o.threads = 5;
+  const std::vector<ShRgb> five = bakeProbes(tracer, roomProbes(), o);
+  ASSERT_EQ(one.size(), two.size());
+  EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size() * sizeof(ShRgb)), 0);
+  EXPECT_EQ(std::memcmp(one.data(), five.data(), one.size() * sizeof(ShRgb)), 0);
+  o.seed += 1;  // and the seed matters
+  const std::vector<ShRgb> other = bakeProbes(tracer, roomProbes(), o);
+  EXPECT_NE(std::memcmp(one.data(), other.data(), one.size() * sizeof(ShRgb)), 0);
+}
+
+void expectSumEquals(const std::vector<ShRgb>& parts0, const std::vector<ShRgb>& parts1,
+                     const std::vector<ShRgb>& parts2, const std::vector<ShRgb>& whole) {
+  for (size_t p = 0; p < whole.size(); ++p)
+    for (int i = 0; i < kShCoeffCount; ++i)
+      for (int ch = 0; ch < 3; ++ch) {
+        const float sum = parts0[p].c[i][ch] + parts1[p].c[i][ch] + parts2[p].c[i][ch];
+        EXPECT_NEAR(sum, whole[p].c[i][ch], 1e-5f * (1.0f + std::fabs(whole[p].c[0][ch])))
+            << "probe " << p << " coefficient " << i;
+      }
+}
+
+// The content flags partition the light: a probe in a closed emissive box holds emissive-direct plus
+// indirect = default. The random streams do not depend on the flags, so the split is exact up to float
+// rounding (tolerance 1e-5 relative to L00), not just statistically.
+TEST(ContentFlags, EmissiveAndIndirectAddUpToDefault) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.7f, 0.6f, 0.5f), glm::vec3(1.0f, 0.8f, 0.3f));
+  const uint32_t dark = test::addMaterial(s, glm::vec3(0.4f));
+  test::addBox(s, {-1, -1, -1}, {1, 1, 1}, true, m, 2);
+  test::addQuad(s, {-0.3f, -0.9f, -0.3f}, {0.3f, -0.9f, -0.3f}, {0.3f, -0.9f, 0.3f}, {-0.3f, -0.9f, 0.3f},
+                dark);
+  SceneTracer tracer(s);
+  const std::vector<glm::dvec3> probes = {{0, 0, 0}, {0.5, -0.3, 0.2}, {-0.7, 0.6, -0.1}};
+  const auto emissive = bakeProbes(tracer, probes, quiet(3, 128, kContentEmissive));
+  const auto indirect = bakeProbes(tracer, probes, quiet(3, 128, kContentIndirect));
+  const auto none = bakeProbes(tracer, probes, quiet(3, 128, 0));
+  const auto def = bakeProbes(tracer, probes, quiet(3, 128, kContentDefault));
+  expectSumEquals(emissive, indirect, none, def);
+  for (const ShRgb& p : none)
+    for (int i = 0; i < kShCoeffCount; ++i) EXPECT_EQ(p.c[i], glm::vec3(0.0f));
+}
+
+// The same partition with every kind of light: emissive + sky + indirect = default, and default + direct
+// punctual = all.
+TEST(ContentFlags, AllFlagsPartitionTheLight) {
+  const Scene s = openRoom();
+  SceneTracer tracer(s);
+  const std::vector<glm::dvec3> probes = roomProbes();
+  const auto emissive = bakeProbes(tracer, probes, quiet(2, 64, kContentEmissive));
+  const auto sky = bakeProbes(tracer, probes, quiet(2, 64, kContentSky));
+  const auto indirect = bakeProbes(tracer, probes, quiet(2, 64, kContentIndirect));
+  const auto punctual = bakeProbes(tracer, probes, quiet(2, 64, kContentDirectPunctual));
+  const auto none = bakeProbes(tracer, probes, quiet(2, 64, 0));
+  const auto def = bakeProbes(tracer, probes, quiet(2, 64, kContentDefault));
+  const auto all = bakeProbes(tracer, probes, quiet(2, 64, kContentAll));
+  expectSumEquals(emissive, sky, indirect, def);
+  expectSumEquals(def, punctual, none, all);
+}
+
+// For a probe, a point light is a delta: with only kContentDirectPunctual it holds exactly
+// (I / r^2) Y(d) + E_sun Y(sun), and nothing once an occluder blocks both (tolerance: float rounding).
+TEST(DirectPunctual, ProbeHoldsExactDeltaProjection) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.5f));
+  test::addGround(s, -5.0f, 50.0f, m);
+  Light point;
+  point.position = {1.0f, 2.0f, -1.0f};
+  point.intensity = {10.0f, 20.0f, 30.0f};
+  s.lights.push_back(point);
+  Light sun;
+  sun.type = LightType::kDirectional;
+  sun.direction = glm::normalize(glm::vec3(-0.2f, -1.0f, 0.4f));
+  sun.intensity = {2.0f, 1.0f, 0.5f};
+  s.lights.push_back(sun);
+  SceneTracer tracer(s);
+  const glm::dvec3 probe(0.2, 0.5, 0.3);
+  const auto sh = bakeProbes(tracer, {probe}, quiet(2, 16, kContentDirectPunctual));
+  const glm::vec3 d = point.position - glm::vec3(probe);
+  const float r2 = glm::dot(d, d);
+  const glm::vec3 w = glm::normalize(d), ws = -sun.direction;
+  const auto y = shBasis<double>(w.x, w.y, w.z), ys = shBasis<double>(ws.x, ws.y, ws.z);
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int ch = 0; ch < 3; ++ch) {
+      const double exact = point.intensity[ch] / r2 * y[i] + sun.intensity[ch] * ys[i];
+      EXPECT_NEAR(sh[0].c[i][ch], exact, 1e-5 * (1 + std::fabs(exact))) << "coefficient " << i;
+    }
+  // A large roof above the probe shadows both lights.
+  Scene roofed = s;
+  test::addQuad(roofed, {-20, 1.5f, -20}, {20, 1.5f, -20}, {20, 1.5f, 20}, {-20, 1.5f, 20}, m);
+  SceneTracer roofTracer(roofed);
+  const auto shadowed = bakeProbes(roofTracer, {probe}, quiet(2, 16, kContentDirectPunctual));
+  for (int i = 0; i < kShCoeffCount; ++i) EXPECT_EQ(shadowed[0].c[i], glm::vec3(0.0f));
+}
+
+}  // namespace
+}  // namespace tetraprobe
