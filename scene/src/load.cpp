@@ -106,23 +106,12 @@ bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-}  // namespace
-
-Scene loadScene(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no such file");
-  const std::string name = lowerCase(path);
+// Runs `load` turning any non-InputError exception into an InputError naming `path`, then validates.
+template <typename Load>
+Scene loadChecked(const std::string& path, Load load) {
   Scene scene;
   try {
-    if (endsWith(name, ".scene.json")) {
-      scene = detail::loadSceneJson(path);
-    } else if (endsWith(name, ".obj")) {
-      scene = detail::loadObj(path);
-    } else if (endsWith(name, ".gltf") || endsWith(name, ".glb")) {
-      scene = detail::loadGltf(path);
-    } else {
-      throw InputError(path + ": unknown scene format (expected .obj, .gltf, .glb or .scene.json)");
-    }
+    scene = load();
   } catch (const InputError&) {
     throw;
   } catch (const std::bad_alloc&) {
@@ -133,6 +122,36 @@ Scene loadScene(const std::string& path) {
   scene.sourcePath = path;
   detail::validateScene(scene, path);
   return scene;
+}
+
+void requireFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no such file");
+}
+
+}  // namespace
+
+namespace detail {
+
+Scene loadMesh(const std::string& path, const MeshOptions& options) {
+  requireFile(path);
+  const std::string name = lowerCase(path);
+  if (endsWith(name, ".obj")) return loadChecked(path, [&] { return loadObj(path, options); });
+  if (endsWith(name, ".gltf") || endsWith(name, ".glb"))
+    return loadChecked(path, [&] { return loadGltf(path, options); });
+  throw InputError(path + ": unknown mesh format (expected .obj, .gltf or .glb)");
+}
+
+}  // namespace detail
+
+Scene loadScene(const std::string& path) {
+  requireFile(path);
+  if (endsWith(lowerCase(path), ".scene.json"))
+    return loadChecked(path, [&] { return detail::loadSceneJson(path); });
+  const std::string name = lowerCase(path);
+  if (!endsWith(name, ".obj") && !endsWith(name, ".gltf") && !endsWith(name, ".glb"))
+    throw InputError(path + ": unknown scene format (expected .obj, .gltf, .glb or .scene.json)");
+  return detail::loadMesh(path, detail::MeshOptions{});
 }
 
 }  // namespace tetraprobe

@@ -215,7 +215,7 @@ std::optional<glm::vec3> textureMean(Context& ctx, int textureIndex, const std::
   return mean;
 }
 
-void convertMaterials(Context& ctx) {
+void convertMaterials(Context& ctx, bool textures) {
   const auto& m = ctx.model;
   ctx.materialMap.resize(m.materials.size());
   for (size_t i = 0; i < m.materials.size(); ++i) {
@@ -224,7 +224,7 @@ void convertMaterials(Context& ctx) {
     out.name = gm.name.empty() ? "material_" + std::to_string(i) : gm.name;
     const auto& pbr = gm.pbrMetallicRoughness;
     out.albedo = rgb(pbr.baseColorFactor, 1.0);
-    if (pbr.baseColorTexture.index >= 0) {
+    if (textures && pbr.baseColorTexture.index >= 0) {
       if (auto mean = textureMean(ctx, pbr.baseColorTexture.index, out.name)) out.albedo *= *mean;
     }
     out.emission = rgb(gm.emissiveFactor, 0.0);
@@ -233,7 +233,7 @@ void convertMaterials(Context& ctx) {
       const tinygltf::Value& s = ext->second.Get("emissiveStrength");
       if (s.IsNumber()) out.emission *= static_cast<float>(s.GetNumberAsDouble());
     }
-    if (gm.emissiveTexture.index >= 0 && out.emission != glm::vec3(0.0f)) {
+    if (textures && gm.emissiveTexture.index >= 0 && out.emission != glm::vec3(0.0f)) {
       if (auto mean = textureMean(ctx, gm.emissiveTexture.index, out.name)) out.emission *= *mean;
     }
     ctx.materialMap[i] = static_cast<uint32_t>(ctx.scene.materials.size());
@@ -392,7 +392,7 @@ void visitNode(Context& ctx, int index, const glm::dmat4& parent) {
 
 }  // namespace
 
-Scene loadGltf(const std::string& path) {
+Scene loadGltf(const std::string& path, const MeshOptions& options) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepEncodedImage, nullptr);
   tinygltf::Model model;
@@ -421,7 +421,7 @@ Scene loadGltf(const std::string& path) {
   }
 
   Context ctx{model, path, scene, {}, UINT32_MAX, {}, {}, 0, 0};
-  convertMaterials(ctx);
+  convertMaterials(ctx, options.textures);
 
   std::vector<int> roots;
   int sceneIndex = model.defaultScene;

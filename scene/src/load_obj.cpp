@@ -114,7 +114,7 @@ void splitWarnings(const std::string& text, const std::string& path, Scene& scen
 
 }  // namespace
 
-Scene loadObj(const std::string& path) {
+Scene loadObj(const std::string& path, const MeshOptions& options) {
   prescanObj(path);
 
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
@@ -149,10 +149,10 @@ Scene loadObj(const std::string& path) {
     out.name = m.name;
     out.albedo = glm::vec3(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
     out.emission = glm::vec3(m.emission[0], m.emission[1], m.emission[2]);
-    if (!m.diffuse_texname.empty()) {
+    if (options.textures && !m.diffuse_texname.empty()) {
       if (auto mean = textures.get(m.diffuse_texname, m.name)) out.albedo *= *mean;
     }
-    if (!m.emissive_texname.empty() && out.emission != glm::vec3(0.0f)) {
+    if (options.textures && !m.emissive_texname.empty() && out.emission != glm::vec3(0.0f)) {
       if (auto mean = textures.get(m.emissive_texname, m.name)) out.emission *= *mean;
     }
     scene.materials.push_back(out);

@@ -15,7 +15,6 @@
 
 #include "loaders.h"
 #include "tetraprobe/common/error.h"
-#include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::detail {
 
@@ -214,8 +213,16 @@ Scene loadSceneJson(const std::string& path) {
   std::filesystem::path meshPath(meshName);
   if (meshPath.is_relative()) meshPath = std::filesystem::path(path).parent_path() / meshPath;
   const std::string meshFile = meshPath.string();
-  if (meshFile.size() >= 11 && meshFile.compare(meshFile.size() - 11, 11, ".scene.json") == 0)
-    throw InputError(path + ": mesh: must be an .obj, .gltf or .glb file, not another scene JSON");
+
+  MeshOptions options;
+  if (root.contains("textures")) {
+    const std::string mode = pre.string(root["textures"], "textures");
+    if (mode == "ignore") {
+      options.textures = false;
+    } else if (mode != "multiply") {
+      throw InputError(path + ": textures: expected \"multiply\" or \"ignore\", got \"" + mode + "\"");
+    }
+  }
 
   float scale = 1.0f;
   if (root.contains("unit_scale")) {
@@ -223,10 +230,11 @@ Scene loadSceneJson(const std::string& path) {
     if (!(scale > 0.0f)) throw InputError(path + ": unit_scale: must be > 0");
   }
 
-  Scene scene = loadScene(meshFile);  // validated; InputError names the mesh file
+  Scene scene = loadMesh(meshFile, options);  // validated; InputError names the mesh file
   const Reader r{path, scene};
-  r.checkKeys(root, "",
-              {"mesh", "unit_scale", "sky", "lights", "cameras", "fine_volumes", "materials", "comment"});
+  r.checkKeys(
+      root, "",
+      {"mesh", "unit_scale", "textures", "sky", "lights", "cameras", "fine_volumes", "materials", "comment"});
 
   if (scale != 1.0f) {
     for (glm::vec3& p : scene.positions) p *= scale;

@@ -13,11 +13,20 @@
 
 namespace tetraprobe::detail {
 
+struct MeshOptions {
+  // false: ignore base-colour/diffuse and emissive textures (albedo = Kd or baseColorFactor alone), for files
+  // whose Kd already holds the texture's mean colour. Scene JSON key "textures": "ignore".
+  bool textures = true;
+};
+
 // Each loader fills positions/triangles/materials/lights/cameras of a fresh Scene and throws InputError
-// ("<path>: <problem>") for malformed input. They do not run validateScene(); loadScene() does.
-Scene loadObj(const std::string& path);
-Scene loadGltf(const std::string& path);
+// ("<path>: <problem>") for malformed input. They do not run validateScene(); loadMesh()/loadScene() do.
+Scene loadObj(const std::string& path, const MeshOptions& options);
+Scene loadGltf(const std::string& path, const MeshOptions& options);
 Scene loadSceneJson(const std::string& path);
+
+// Loads an .obj/.gltf/.glb file by extension and validates it (a scene JSON is not a mesh: InputError).
+Scene loadMesh(const std::string& path, const MeshOptions& options);
 
 // Shared validation: throws InputError naming `path` for NaN/Inf positions, out-of-range indices or
 // material ids, or zero triangles; drops zero-area triangles and records their count in scene.warnings.

@@ -106,6 +106,28 @@ TEST(LoadSceneJson, ConstantSkyHasNoGradient) {
   EXPECT_EQ(s.skyRadiance, glm::vec3(1, 2, 3));
 }
 
+// Some converters store a texture's mean colour in Kd as well as naming the texture (q3_dm4ish): "ignore".
+TEST(LoadSceneJson, TexturesIgnoreKeepsKd) {
+  const auto dir = freshDir();
+  test::writePng(dir / "t.png", 1, 1, {0, 0, 0});
+  writeText(dir / "m.mtl", "newmtl dark\nKd 0.25 0.5 0.75\nmap_Kd t.png\n");
+  writeText(dir / "m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl dark\nf 1 2 3\n");
+  const Scene multiplied = loadScene(writeText(dir / "a.scene.json", R"({"mesh": "m.obj"})"));
+  EXPECT_EQ(multiplied.materials[0].albedo, glm::vec3(0.0f));
+  const Scene kept = loadScene(writeText(dir / "b.scene.json", R"({"mesh": "m.obj", "textures": "ignore"})"));
+  EXPECT_EQ(kept.materials[0].albedo, glm::vec3(0.25f, 0.5f, 0.75f));
+  const std::string msg =
+      loadError(writeText(dir / "c.scene.json", R"({"mesh": "m.obj", "textures": "replace"})"));
+  EXPECT_NE(msg.find("textures"), std::string::npos) << msg;
+}
+
+TEST(LoadSceneJson, MeshMustNotBeAnotherSceneJson) {
+  const auto dir = freshDir();
+  writeText(dir / "inner.scene.json", R"({"mesh": "outer.scene.json"})");
+  const std::string msg = loadError(writeText(dir / "outer.scene.json", R"({"mesh": "inner.scene.json"})"));
+  EXPECT_NE(msg.find("unknown mesh format"), std::string::npos) << msg;
+}
+
 TEST(LoadSceneJson, UnknownKeysWarn) {
   const auto dir = freshDir();
   writeMesh(dir);

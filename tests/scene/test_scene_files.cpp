@@ -104,6 +104,24 @@ TEST(SharedScenes, CornellBoxGlbTriangleCount) {
 TEST(SharedScenes, SponzaObjTriangleCount) {
   expectTriangles("sponza_dabrovic/sponza.obj", 66450, 0);
 }
+TEST(SharedScenes, SponzaGlbTriangleCount) {
+  expectTriangles("sponza_dabrovic/sponza.glb", 66450, 0);
+}
+TEST(SharedScenes, CornellDataObjTriangleCount) {
+  expectTriangles("cornell_box/cornell_box_cornelldata.obj", 36, 1);
+}
+TEST(SharedScenes, ConferenceObjTriangleCount) {
+  expectTriangles("conference/conference.obj", 69047, 0);
+}
+TEST(SharedScenes, ConferenceGlbTriangleCount) {
+  expectTriangles("conference/conference.glb", 69047, 0);
+}
+TEST(SharedScenes, Dm4ishObjTriangleCount) {
+  expectTriangles("q3_dm4ish/dm4ish.obj", 3430, 1);
+}
+TEST(SharedScenes, Dm4ishGlbTriangleCount) {
+  expectTriangles("q3_dm4ish/dm4ish.glb", 3430, 1);
+}
 
 TEST(SharedScenes, SponzaTexturesAllResolve) {
   const auto path = kShared / "sponza_dabrovic/sponza.obj";
@@ -111,6 +129,41 @@ TEST(SharedScenes, SponzaTexturesAllResolve) {
   const Scene s = loadScene(path.string());
   EXPECT_FALSE(test::anyWarningContains(s, "not found"));
   EXPECT_FALSE(test::anyWarningContains(s, "cannot decode"));
+}
+
+}  // namespace
+}  // namespace tetraprobe
+
+namespace tetraprobe {
+namespace {
+
+// An OBJ and the glTF converted from it must give the same albedo and emission for every material name: the
+// loaders interpret Kd/baseColorFactor, map_Kd/baseColorTexture and Ke/emissiveFactor the same way.
+void expectObjAndGlbAgree(const std::string& obj, const std::string& glb) {
+  if (!std::filesystem::exists(kShared / obj) || !std::filesystem::exists(kShared / glb))
+    GTEST_SKIP() << "shared scenes not present";
+  const Scene a = loadScene((kShared / obj).string());
+  const Scene b = loadScene((kShared / glb).string());
+  size_t compared = 0;
+  for (const Material& ma : a.materials) {
+    for (const Material& mb : b.materials) {
+      if (ma.name != mb.name) continue;
+      ++compared;
+      EXPECT_NEAR(glm::distance(ma.albedo, mb.albedo), 0.0f, 1e-4f) << ma.name;
+      EXPECT_NEAR(glm::distance(ma.emission, mb.emission), 0.0f, 1e-3f) << ma.name;
+    }
+  }
+  EXPECT_GE(compared + 1, a.materials.size());  // all but at most an unused default
+}
+
+TEST(SharedScenes, SponzaObjAndGlbMaterialsAgree) {
+  expectObjAndGlbAgree("sponza_dabrovic/sponza.obj", "sponza_dabrovic/sponza.glb");
+}
+TEST(SharedScenes, VeachAjarObjAndGlbMaterialsAgree) {
+  expectObjAndGlbAgree("veach_ajar/veach_ajar.obj", "veach_ajar/veach_ajar.glb");
+}
+TEST(SharedScenes, Dm4ishObjAndGlbMaterialsAgree) {
+  expectObjAndGlbAgree("q3_dm4ish/dm4ish.obj", "q3_dm4ish/dm4ish.glb");
 }
 
 }  // namespace
