@@ -1,1 +1,285 @@
-// (being written)
+// CPU point location in the probe tetrahedralization and SH interpolation (Cupisz, GDC 2012: barycentric
+// rows per tet, and a walk that steps across the face opposite the most negative weight), started from a
+// coarse uniform grid of start tets (a lighter cousin of Valient 2014's per-cell lookup).
+//
+// Numerics: the stored rows are float (the GPU's layout); the CPU evaluates them in double on the
+// double-precision local point, so its only float error is the rows' own rounding. A walk is bounded
+// (kMaxWalkSteps) and checked for cycles (Brent); either ends in a brute-force scan, so every query
+// terminates with a defined answer.
+#include "tetraprobe/runtime/query.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <system_error>
+#include <thread>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+namespace tetraprobe {
+namespace {
+
+constexpr int kMaxWalkSteps = 4096;
+constexpr double kInsideEps = 1e-6;      // a weight >= -kInsideEps counts as inside (Location::inside)
+constexpr double kProbesPerCell = 12.0;  // start grid density (8-16 probes per cell)
+constexpr int kMaxGridDim = 1024;        // per axis
+constexpr double kMaxGridCells = double(1 << 22);
+constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
+constexpr size_t kMinBatchPerThread = 256;
+
+// Raw barycentric weights of local point x in tet t (may be negative outside), evaluated in double.
+inline void tetWeights(const Tet& t, const glm::dvec3& x, double w[4]) {
+  for (int i = 0; i < 3; ++i)
+    w[i] = double(t.row[i][0]) * x.x + double(t.row[i][1]) * x.y + double(t.row[i][2]) * x.z +
+           double(t.row[i][3]);
+  w[3] = 1.0 - w[0] - w[1] - w[2];
+}
+
+// Smallest weight and its index.
+inline int minIndex(const double w[4]) {
+  int m = 0;
+  for (int i = 1; i < 4; ++i)
+    if (w[i] < w[m]) m = i;
+  return m;
+}
+
+// Clamps to >= 0 and renormalizes; a degenerate sum (all clamped away, or non-finite) gives equal weights.
+Location finish(int32_t tet, const double w[4], bool inside) {
+  double c[4], sum = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    c[i] = w[i] > 0.0 ? w[i] : 0.0;  // NaN -> 0
+    sum += c[i];
+  }
+  Location loc;
+  loc.tet = tet;
+  loc.inside = inside;
+  if (!(sum > 0.0) || !std::isfinite(sum)) {
+    loc.weights = glm::vec4(0.25f);
+    loc.inside = false;
+    return loc;
+  }
+  for (int i = 0; i < 4; ++i) loc.weights[i] = float(c[i] / sum);
+  return loc;
+}
+
+// Local-frame point with a defined value for any input: NaN components go to the probe bounds' centre,
+// +-Inf to the bounds, and points absurdly far away are pulled radially to `maxRadius` from the centre (the
+// direction is kept, so the hull tet found is the same; the weights stay far from overflow).
+glm::dvec3 sanitize(glm::dvec3 x, const StartGrid& g) {
+  const glm::dvec3 lo(g.min), hi = lo + glm::dvec3(g.cellSize) * glm::dvec3(g.dims);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  for (int a = 0; a < 3; ++a) {
+    if (std::isnan(x[a])) x[a] = centre[a];
+    if (std::isinf(x[a])) x[a] = x[a] > 0 ? hi[a] : lo[a];
+  }
+  const double maxRadius = 1e6 * (glm::length(hi - lo) + 1.0);
+  const glm::dvec3 d = x - centre;
+  const double r2 = glm::dot(d, d);
+  if (r2 > maxRadius * maxRadius) x = centre + d * (maxRadius / std::sqrt(r2));
+  return x;
+}
+
+int32_t gridCell(const StartGrid& g, const glm::dvec3& x) {
+  int c[3];
+  for (int a = 0; a < 3; ++a) {
+    const double f = std::floor((x[a] - double(g.min[a])) / double(g.cellSize[a]));
+    c[a] = int(std::clamp(f, 0.0, double(g.dims[a] - 1)));  // clamp in double: no overflowing int conversion
+  }
+  return c[0] + g.dims.x * (c[1] + g.dims.y * c[2]);
+}
+
+Location scanAll(const Level& level, const glm::dvec3& x) {
+  int32_t best = -1;
+  double bestMin = -std::numeric_limits<double>::infinity(), bestW[4] = {0.25, 0.25, 0.25, 0.25};
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    double w[4];
+    tetWeights(level.tets[t], x, w);
+    const double m = w[minIndex(w)];
+    if (best < 0 || m > bestMin) {
+      best = int32_t(t);
+      bestMin = m;
+      std::copy(w, w + 4, bestW);
+    }
+  }
+  return finish(best, bestW, bestMin >= -kInsideEps);
+}
+
+// Builds the start grid: cells of ~kProbesPerCell probes over the probe bounds; each cell names the tet
+// whose centroid is nearest its centre (exact search over rings of cells up to kExactRings, then a
+// breadth-first flood fill for cells with no centroid that close). O(tets + cells), no per-cell scan.
+StartGrid buildStartGrid(const Level& level) {
+  StartGrid g;
+  if (level.tets.empty()) return g;
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const glm::vec3& p : level.probes) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  glm::dvec3 ext = hi - lo;
+  const double maxExt = std::max({ext.x, ext.y, ext.z, 1e-3});
+  ext = glm::max(ext, glm::dvec3(1e-3 * maxExt));
+  const double cells = std::clamp(double(level.probes.size()) / kProbesPerCell, 1.0, kMaxGridCells);
+  const double cell = std::cbrt(ext.x * ext.y * ext.z / cells);
+  for (int a = 0; a < 3; ++a) g.dims[a] = int(std::clamp(std::ceil(ext[a] / cell), 1.0, double(kMaxGridDim)));
+  // Float cell geometry (the GPU's values), padded by a hair so the max-corner probes fall inside.
+  g.min = glm::vec3(lo);
+  g.cellSize = glm::vec3(ext * (1.0 + 1e-6) / glm::dvec3(g.dims));
+  const glm::ivec3 dims = g.dims;
+  const size_t cellCount = size_t(dims.x) * size_t(dims.y) * size_t(dims.z);
+
+  // Bin tet centroids into cells (counting sort).
+  std::vector<glm::dvec3> centroid(level.tets.size());
+  std::vector<int32_t> cellOf(level.tets.size());
+  std::vector<int32_t> start(cellCount + 1, 0);
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::dvec3 c(0.0);
+    for (int i = 0; i < 4; ++i) c += glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
+    centroid[t] = 0.25 * c;
+    cellOf[t] = gridCell(g, centroid[t]);
+    ++start[size_t(cellOf[t]) + 1];
+  }
+  for (size_t c = 0; c < cellCount; ++c) start[c + 1] += start[c];
+  std::vector<int32_t> binned(level.tets.size());
+  {
+    std::vector<int32_t> fill(start.begin(), start.end() - 1);
+    for (size_t t = 0; t < level.tets.size(); ++t) binned[size_t(fill[size_t(cellOf[t])]++)] = int32_t(t);
+  }
+
+  const glm::dvec3 cs(g.cellSize), gmin(g.min);
+  const double minCell = std::min({cs.x, cs.y, cs.z});
+  g.startTet.assign(cellCount, -1);
+  std::vector<int32_t> queue;
+  queue.reserve(cellCount);
+  for (int z = 0; z < dims.z; ++z)
+    for (int y = 0; y < dims.y; ++y)
+      for (int x = 0; x < dims.x; ++x) {
+        const glm::dvec3 centre = gmin + (glm::dvec3(x, y, z) + 0.5) * cs;
+        int32_t best = -1;
+        double bestD = std::numeric_limits<double>::infinity();
+        for (int r = 0; r <= kExactRings; ++r) {
+          for (int cz = std::max(z - r, 0); cz <= std::min(z + r, dims.z - 1); ++cz)
+            for (int cy = std::max(y - r, 0); cy <= std::min(y + r, dims.y - 1); ++cy)
+              for (int cx = std::max(x - r, 0); cx <= std::min(x + r, dims.x - 1); ++cx) {
+                if (std::max({std::abs(cx - x), std::abs(cy - y), std::abs(cz - z)}) != r)
+                  continue;  // shell only
+                const size_t c = size_t(cx) + size_t(dims.x) * (size_t(cy) + size_t(dims.y) * size_t(cz));
+                for (int32_t k = start[c]; k < start[c + 1]; ++k) {
+                  const int32_t t = binned[size_t(k)];
+                  const glm::dvec3 d = centroid[size_t(t)] - centre;
+                  const double d2 = glm::dot(d, d);
+                  if (d2 < bestD || (d2 == bestD && t < best)) {
+                    bestD = d2;
+                    best = t;
+                  }
+                }
+              }
+          // Every centroid in ring r+1 is at least (r + 0.5) cells from this centre.
+          const double bound = (r + 0.5) * minCell;
+          if (best >= 0 && bestD <= bound * bound) break;
+        }
+        const int32_t cell = x + dims.x * (y + dims.y * z);
+        g.startTet[size_t(cell)] = best;
+        if (best >= 0) queue.push_back(cell);
+      }
+  // Flood fill the rest from resolved cells (face neighbours, breadth first: deterministic).
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int32_t cell = queue[head];
+    const int x = cell % dims.x, y = (cell / dims.x) % dims.y, z = cell / (dims.x * dims.y);
+    const int nb[6][3] = {{x - 1, y, z}, {x + 1, y, z}, {x, y - 1, z},
+                          {x, y + 1, z}, {x, y, z - 1}, {x, y, z + 1}};
+    for (const auto& n : nb) {
+      if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= dims.x || n[1] >= dims.y || n[2] >= dims.z) continue;
+      const int32_t ncell = n[0] + dims.x * (n[1] + dims.y * n[2]);
+      if (g.startTet[size_t(ncell)] >= 0) continue;
+      g.startTet[size_t(ncell)] = g.startTet[size_t(cell)];
+      queue.push_back(ncell);
+    }
+  }
+  return g;
+}
+
+}  // namespace
+
+ProbeQuery::ProbeQuery(const Level& level) : level_(level), grid_(buildStartGrid(level)) {}
+
+Location ProbeQuery::bruteForceLocate(const glm::dvec3& world) const {
+  if (level_.tets.empty()) return Location{};
+  return scanAll(level_, sanitize(world - level_.origin, grid_));
+}
+
+Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
+  const std::vector<Tet>& tets = level_.tets;
+  if (tets.empty()) return Location{};
+  const glm::dvec3 x = sanitize(world - level_.origin, grid_);
+  int32_t cur = (hint >= 0 && size_t(hint) < tets.size()) ? hint : grid_.startTet[size_t(gridCell(grid_, x))];
+  int32_t saved = cur;  // Brent's cycle detection: compare against a checkpoint moved at powers of two
+  int power = 1, lam = 0;
+  for (int step = 0; step < kMaxWalkSteps; ++step) {
+    double w[4];
+    tetWeights(tets[size_t(cur)], x, w);
+    const int m = minIndex(w);
+    const int32_t next = tets[size_t(cur)].n[m];
+    if (w[m] >= -kInsideEps || std::isnan(w[m])) {
+      // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
+      // whichever tet holds it better, so the answer does not depend on the side the walk came from.
+      if (w[m] < 0.0 && next >= 0) {
+        double wn[4];
+        tetWeights(tets[size_t(next)], x, wn);
+        if (wn[minIndex(wn)] > w[m]) return finish(next, wn, true);
+      }
+      return finish(cur, w, true);
+    }
+    if (next < 0) return finish(cur, w, false);  // leaving through a hull face: the point is outside the hull
+    assert(size_t(next) < tets.size());
+    cur = next;
+    if (cur == saved) break;  // cycle (floating-point walks can loop)
+    if (++lam == power) {
+      saved = cur;
+      power *= 2;
+      lam = 0;
+    }
+  }
+  return scanAll(level_, x);
+}
+
+glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache) const {
+  const Location loc = locate(world, tetCache ? *tetCache : -1);
+  if (tetCache) *tetCache = loc.tet;
+  if (loc.tet < 0) return glm::vec3(0.0f);
+  const Tet& t = level_.tets[size_t(loc.tet)];
+  const ShRgb* probes[4];
+  float w[4];
+  for (int i = 0; i < 4; ++i) {
+    probes[i] = &level_.sh[size_t(t.v[i])];
+    w[i] = loc.weights[i];
+  }
+  return shIrradiance(shBlend(probes, w, 4), normal);
+}
+
+void ProbeQuery::irradianceBatch(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out,
+                                 size_t count, int threads) const {
+  if (count == 0) return;
+  size_t n = threads > 0 ? size_t(threads) : size_t(std::max(1u, std::thread::hardware_concurrency()));
+  n = std::clamp<size_t>((count + kMinBatchPerThread - 1) / kMinBatchPerThread, 1, n);
+  // No hint chaining between items: out[i] is exactly irradiance(world[i], normal[i]).
+  auto work = [=, this](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) out[i] = irradiance(world[i], normal[i]);
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(n - 1);
+  const size_t chunk = (count + n - 1) / n;
+  for (size_t k = 1; k < n; ++k) {
+    const size_t begin = std::min(count, k * chunk), end = std::min(count, begin + chunk);
+    try {
+      pool.emplace_back(work, begin, end);
+    } catch (const std::system_error&) {
+      work(begin, end);  // no thread available: do that share here
+    }
+  }
+  work(0, std::min(count, chunk));
+  for (std::thread& t : pool) t.join();
+}
+
+}  // namespace tetraprobe

@@ -39,6 +39,12 @@ class ProbeQuery {
   // its weights clamped to be non-negative and renormalized.
   Location locate(const glm::dvec3& world, int32_t hint = -1) const;
 
+  // Reference answer for tests and the walk's fallback: scans every tet (O(tets)) and returns the one whose
+  // smallest weight is largest (ties: lowest index), clamped and renormalized as locate() does. Inside the
+  // hull it agrees with locate() (up to which of two tets sharing a face is named for a point on it); the
+  // hint never changes locate()'s answer inside the hull, while outside it may pick another hull tet.
+  Location bruteForceLocate(const glm::dvec3& world) const;
+
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
   // given it is read as the walk's starting hint and updated with the tet found (per-object caching).
   glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;

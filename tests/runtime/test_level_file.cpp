@@ -1,0 +1,246 @@
+// The `.tpb` level file: exact round trips, and a loader that survives hostile bytes (docs/level_format.md).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "test_levels.h"
+#include "tetraprobe/runtime/file_io.h"
+#include "tetraprobe/runtime/level.h"
+
+namespace tetraprobe {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh directory per test, removed afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("tetraprobe_level_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  static inline int counter_ = 0;
+  fs::path path_;
+};
+
+Level smallLevel() {
+  Level level =
+      test::makeLevel(test::randomBoxPoints(10, 3, {-2, -1, -3}, {2, 1, 3}), {5000.25, -20.5, 1e4}, 9);
+  level.content = kContentAll;
+  return level;
+}
+
+std::vector<char> bytesOf(const std::string& path) {
+  std::vector<char> b;
+  std::string err;
+  EXPECT_TRUE(readFile(path, b, &err)) << err;
+  return b;
+}
+
+void writeBytes(const std::string& path, const std::vector<char>& b, size_t n) {
+  std::ofstream(path, std::ios::binary).write(b.data(), std::streamsize(n));
+}
+
+uint32_t crc32(const char* p, size_t n) {  // the format's CRC-32 (zlib), to forge consistent files
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) {
+    c ^= uint8_t(p[i]);
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+
+void putU32(std::vector<char>& b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + size_t(i)] = char(uint8_t(v >> (8 * i)));
+}
+void putU64(std::vector<char>& b, size_t at, uint64_t v) {
+  for (int i = 0; i < 8; ++i) b[at + size_t(i)] = char(uint8_t(v >> (8 * i)));
+}
+void fixHeaderCrc(std::vector<char>& b) {
+  putU32(b, 76, crc32(b.data(), 76));
+}
+void fixPayloadCrc(std::vector<char>& b) {
+  putU32(b, b.size() - 4, crc32(b.data() + 80, b.size() - 84));
+}
+
+bool emptyLevel(const Level& l) {
+  return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty();
+}
+
+// A bake must reload exactly (no float re-rounding, nothing dropped), and equal input must give equal bytes.
+TEST(LevelFile, RoundTripIsBitExact) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("a.tpb"), level));
+  Level back;
+  const LevelResult r = loadLevel(dir.file("a.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  EXPECT_EQ(back.content, level.content);
+  EXPECT_EQ(back.shOrder, level.shOrder);
+  EXPECT_EQ(std::memcmp(&back.origin, &level.origin, sizeof(level.origin)), 0);
+  ASSERT_EQ(back.probes.size(), level.probes.size());
+  ASSERT_EQ(back.sh.size(), level.sh.size());
+  ASSERT_EQ(back.tets.size(), level.tets.size());
+  EXPECT_EQ(std::memcmp(back.probes.data(), level.probes.data(), level.probes.size() * sizeof(glm::vec3)), 0);
+  EXPECT_EQ(std::memcmp(back.sh.data(), level.sh.data(), level.sh.size() * sizeof(ShRgb)), 0);
+  EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
+  EXPECT_EQ(back.generator, level.generator);
+  ASSERT_TRUE(saveLevel(dir.file("b.tpb"), level));
+  ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
+  // The documented size: 80-byte header, 120 bytes per probe, 80 per tet, the generator, a 4-byte CRC.
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
+            80 + 120 * level.probes.size() + 80 * level.tets.size() + level.generator.size() + 4);
+}
+
+// An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
+TEST(LevelFile, RejectsTruncatedFilesAtEveryLength) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  for (size_t n = 0; n < full.size(); ++n) {
+    writeBytes(dir.file("cut.tpb"), full, n);
+    Level out;
+    const LevelResult r = loadLevel(dir.file("cut.tpb"), out);
+    ASSERT_EQ(r.status, LevelStatus::kTruncated) << n << " of " << full.size() << " bytes: " << r.message;
+    EXPECT_FALSE(r.message.empty());
+    EXPECT_TRUE(emptyLevel(out));
+  }
+}
+
+// Bit rot and hostile edits must end in a status (bad magic, bad version, or corrupt), never a crash or a
+// silently different level.
+TEST(LevelFile, RejectsCorruptedByte) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  for (size_t at = 0; at < full.size(); ++at)
+    for (uint8_t flip : {uint8_t(0x01), uint8_t(0xFF)}) {
+      std::vector<char> b = full;
+      b[at] = char(uint8_t(b[at]) ^ flip);
+      writeBytes(dir.file("bad.tpb"), b, b.size());
+      Level out;
+      const LevelResult r = loadLevel(dir.file("bad.tpb"), out);
+      const LevelStatus want = at < 8    ? LevelStatus::kNotALevel
+                               : at < 12 ? LevelStatus::kUnsupportedVersion
+                                         : LevelStatus::kCorrupt;
+      ASSERT_EQ(r.status, want) << "byte " << at << " ^ " << int(flip) << ": " << r.message;
+      EXPECT_TRUE(emptyLevel(out));
+    }
+}
+
+// A file with valid checksums but broken indices (a buggy writer, or a forger) must fail validation.
+TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  const size_t tets = 80 + 120 * level.probes.size();
+  const struct {
+    size_t offset;
+    uint32_t value;
+    const char* needle;
+  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},  // tet 0 vertex 0
+               {tets + 4, uint32_t(-7), "out of range"},                   // tet 0 vertex 1
+               {tets + 16, uint32_t(level.tets.size()), "out of range"},   // tet 0 neighbour 0
+               {tets + 32, 0x7FC00000u, "non-finite"}};                    // tet 0 row: NaN
+  for (const auto& c : cases) {
+    std::vector<char> b = full;
+    putU32(b, c.offset, c.value);
+    fixPayloadCrc(b);
+    writeBytes(dir.file("forged.tpb"), b, b.size());
+    Level out;
+    const LevelResult r = loadLevel(dir.file("forged.tpb"), out);
+    EXPECT_EQ(r.status, LevelStatus::kCorrupt) << r.message;
+    EXPECT_NE(r.message.find(c.needle), std::string::npos) << r.message;
+    EXPECT_TRUE(emptyLevel(out));
+  }
+}
+
+// A header claiming 1e12 tets must fail on the size check, before any allocation.
+TEST(LevelFile, RejectsHugeCounts) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  const struct {
+    size_t offset;
+    uint64_t count;
+    LevelStatus want;
+  } cases[] = {{56, 1'000'000'000'000ull, LevelStatus::kCorrupt},  // tets beyond the int32 index range
+               {48, ~0ull, LevelStatus::kCorrupt},               // probes: would overflow a size computation
+               {56, 2'000'000'000ull, LevelStatus::kTruncated},  // in range, but the file is far too short
+               {64, 1ull << 40, LevelStatus::kCorrupt}};         // generator string
+  for (const auto& c : cases) {
+    std::vector<char> b = full;
+    putU64(b, c.offset, c.count);
+    fixHeaderCrc(b);
+    writeBytes(dir.file("huge.tpb"), b, b.size());
+    Level out;
+    const LevelResult r = loadLevel(dir.file("huge.tpb"), out);
+    EXPECT_EQ(r.status, c.want) << "count " << c.count << " at " << c.offset << ": " << r.message;
+    EXPECT_TRUE(emptyLevel(out));
+  }
+}
+
+// Not every file handed to the loader is a level; the status must say which problem it is.
+TEST(LevelFile, RejectsOtherFilesAndVersions) {
+  TempDir dir;
+  Level out;
+  EXPECT_EQ(loadLevel(dir.file("missing.tpb"), out).status, LevelStatus::kCannotOpen);
+  std::ofstream(dir.file("text.tpb")) << "# this is a text file, not a level\n";
+  EXPECT_EQ(loadLevel(dir.file("text.tpb"), out).status, LevelStatus::kNotALevel);
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  std::vector<char> b = bytesOf(dir.file("full.tpb"));
+  putU32(b, 8, 2);
+  fixHeaderCrc(b);
+  writeBytes(dir.file("v2.tpb"), b, b.size());
+  EXPECT_EQ(loadLevel(dir.file("v2.tpb"), out).status, LevelStatus::kUnsupportedVersion);
+  b = bytesOf(dir.file("full.tpb"));
+  b.push_back(0);
+  writeBytes(dir.file("long.tpb"), b, b.size());
+  EXPECT_EQ(loadLevel(dir.file("long.tpb"), out).status, LevelStatus::kCorrupt);
+}
+
+// A failed save must never leave a partial file (or a stray temporary) where the engine will look.
+TEST(LevelFile, WriteIsAtomic) {
+  TempDir dir;
+  const Level level = smallLevel();
+  const LevelResult r = saveLevel(dir.file("no_such_dir/level.tpb"), level);
+  EXPECT_EQ(r.status, LevelStatus::kWriteFailed);
+  EXPECT_FALSE(r.message.empty());
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+  // An invalid level is refused and the previous good file stays as it was.
+  ASSERT_TRUE(saveLevel(dir.file("level.tpb"), level));
+  const std::vector<char> before = bytesOf(dir.file("level.tpb"));
+  Level broken = level;
+  broken.tets[0].v[0] = 1'000'000;
+  EXPECT_EQ(saveLevel(dir.file("level.tpb"), broken).status, LevelStatus::kWriteFailed);
+  EXPECT_EQ(bytesOf(dir.file("level.tpb")), before);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
+}
+
+// The empty level (no probes) is a legal file: tools write it for levels with no probe volume.
+TEST(LevelFile, EmptyLevelRoundTrips) {
+  TempDir dir;
+  Level empty;
+  ASSERT_TRUE(saveLevel(dir.file("empty.tpb"), empty));
+  Level back;
+  ASSERT_TRUE(loadLevel(dir.file("empty.tpb"), back));
+  EXPECT_TRUE(emptyLevel(back));
+  EXPECT_EQ(bytesOf(dir.file("empty.tpb")).size(), 84u);
+}
+
+}  // namespace
+}  // namespace tetraprobe

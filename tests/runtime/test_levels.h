@@ -1,0 +1,46 @@
+// Test levels built from point sets (through the build side's tetrahedralization) for the runtime tests.
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include "tetraprobe/runtime/level.h"
+#include "tetraprobe/tetra/tetrahedralize.h"
+
+namespace tetraprobe::test {
+
+inline std::vector<glm::dvec3> randomBoxPoints(size_t n, uint64_t seed, const glm::dvec3& lo,
+                                               const glm::dvec3& hi, bool withCorners = true) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<glm::dvec3> pts;
+  if (withCorners)
+    for (int c = 0; c < 8; ++c)
+      pts.emplace_back(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
+  while (pts.size() < n) pts.push_back(lo + (hi - lo) * glm::dvec3(u(rng), u(rng), u(rng)));
+  return pts;
+}
+
+// A level over world-space `points` with local frame `origin`, random SH (L2) unless `sh` is given.
+inline Level makeLevel(const std::vector<glm::dvec3>& points, const glm::dvec3& origin, uint64_t seed = 1,
+                       const ShRgb* sh = nullptr) {
+  Level level;
+  level.origin = origin;
+  level.generator = "tetraprobe tests";
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (const glm::dvec3& p : points) {
+    level.probes.emplace_back(p - origin);
+    ShRgb s;
+    if (sh) {
+      s = *sh;
+    } else {
+      for (auto& c : s.c) c = glm::vec3(u(rng), u(rng), u(rng));
+    }
+    level.sh.push_back(s);
+  }
+  level.tets = buildTetRecords(points, tetrahedralizeDelaunay(points), origin);
+  return level;
+}
+
+}  // namespace tetraprobe::test
