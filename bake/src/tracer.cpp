@@ -16,6 +16,12 @@
 #include "tetraprobe/common/error.h"
 #include "tracer_impl.h"
 
+#if defined(__SSE2__) || defined(__x86_64__)
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+#define TETRAPROBE_BAKE_HAS_MXCSR 1
+#endif
+
 namespace tetraprobe {
 
 namespace {
@@ -179,7 +185,11 @@ Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float 
   hit.hit = true;
   hit.t = rh.ray.tfar;
   hit.triangle = rh.hit.primID;
-  hit.geometricNormal = impl_->normals[hit.triangle];
+  // Embree's Ng is (P1 - P0) x (P2 - P0), the counter-clockwise front normal, unnormalised. Normalising it is
+  // cheaper than a lookup in Impl::normals (a cache miss outside Embree's leaf data).
+  const glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  const float len = glm::length(ng);
+  hit.geometricNormal = len > 0.0f ? ng / len : impl_->normals[hit.triangle];
   hit.frontFace = glm::dot(dir, hit.geometricNormal) < 0.0f;
   hit.u = rh.hit.u;
   hit.v = rh.hit.v;
@@ -205,6 +215,19 @@ bool SceneTracer::occluded(const glm::vec3& origin, const glm::vec3& dir, float 
   rtcOccluded1(impl_->rtcScene, &context, &ray);
   return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
 }
+
+#ifdef TETRAPROBE_BAKE_HAS_MXCSR
+FlushDenormalsScope::FlushDenormalsScope() : saved_(_mm_getcsr()) {
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+}
+FlushDenormalsScope::~FlushDenormalsScope() {
+  _mm_setcsr(saved_);
+}
+#else
+FlushDenormalsScope::FlushDenormalsScope() = default;
+FlushDenormalsScope::~FlushDenormalsScope() = default;
+#endif
 
 glm::vec3 skyRadiance(const Scene& scene, const glm::vec3& dir) {
   if (!scene.hasSkyGradient()) return scene.skyRadiance;

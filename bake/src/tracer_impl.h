@@ -1,6 +1,6 @@
 // SceneTracer::Impl: the Embree handles and the per-triangle tables the bake's samplers read (geometric
 // normals, areas, an area CDF over all triangles and a power CDF over emissive ones). Also the
-// flush-to-zero scope every tracing thread enters. Internal to the bake module.
+// flush-to-zero scope every tracing work item enters. Internal to the bake module.
 #pragma once
 
 #include <cstdint>
@@ -10,12 +10,6 @@
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/bake/tracer.h"
-
-#if defined(__SSE__) || defined(__x86_64__)
-#include <pmmintrin.h>
-#include <xmmintrin.h>
-#define TETRAPROBE_BAKE_HAS_MXCSR 1
-#endif
 
 namespace tetraprobe {
 
@@ -55,28 +49,9 @@ struct SceneTracer::Impl {
 
 namespace bake_detail {
 
-// Sets flush-to-zero and denormals-are-zero for the current thread while alive, restoring the previous
-// mode afterwards (Embree's recommendation for tracing threads; also keeps results independent of which
-// thread runs an item).
-class DenormalScope {
- public:
-#ifdef TETRAPROBE_BAKE_HAS_MXCSR
-  DenormalScope() : saved_(_mm_getcsr()) {
-    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-  }
-  ~DenormalScope() {
-    _mm_setcsr(saved_);
-  }
-
- private:
-  unsigned int saved_;
-#else
-  DenormalScope() = default;
-#endif
-  DenormalScope(const DenormalScope&) = delete;
-  DenormalScope& operator=(const DenormalScope&) = delete;
-};
+// Every tracing work item of the bake enters one (parallelFor threads are short-lived, and setting the mode
+// per item keeps results independent of which thread runs it).
+using DenormalScope = FlushDenormalsScope;
 
 }  // namespace bake_detail
 }  // namespace tetraprobe

@@ -38,6 +38,35 @@ TEST(Tracer, FrontFaceFollowsCounterClockwiseWinding) {
   EXPECT_NEAR(glm::length(p - glm::vec3(0.3f, 0.0f, 0.1f)), 0.0f, 1e-5f);
 }
 
+// The hit normal is the unit (P1 - P0) x (P2 - P0) of the triangle met, for any orientation (Embree's own
+// normal is used on the hot path; this pins its sign and scale to the winding contract).
+TEST(Tracer, GeometricNormalIsUnitCounterClockwiseCross) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.5f));
+  const glm::vec3 a(0.1f, -0.3f, 0.2f), b(1.3f, 0.4f, -0.6f), c(-0.2f, 1.1f, 0.9f);
+  test::addTriangle(s, a, b, c, m);
+  SceneTracer tracer(s);
+  const glm::vec3 n = glm::normalize(glm::cross(b - a, c - a));
+  const glm::vec3 centroid = (a + b + c) / 3.0f;
+  for (float side : {1.0f, -1.0f}) {
+    const Hit h = tracer.intersect(centroid + side * 2.0f * n, -side * n, 0.0f, kInf);
+    ASSERT_TRUE(h.hit);
+    EXPECT_EQ(h.frontFace, side > 0.0f);
+    EXPECT_NEAR(glm::length(h.geometricNormal - n), 0.0f, 1e-6f);
+  }
+}
+
+// Tracing threads run with flush-to-zero / denormals-are-zero, and the scope restores the caller's mode.
+TEST(Tracer, FlushDenormalsScopeSetsAndRestoresTheMode) {
+  volatile float tiny = 1e-39f;  // a denormal
+  ASSERT_NE(tiny * 1.0f, 0.0f);
+  {
+    FlushDenormalsScope scope;
+    EXPECT_EQ(tiny * 1.0f, 0.0f);
+  }
+  EXPECT_NE(tiny * 1.0f, 0.0f);
+}
+
 // Occluded must agree with intersect on the segment it tests, including the tfar bound.
 TEST(Tracer, OccludedAgreesWithIntersect) {
   Scene s;

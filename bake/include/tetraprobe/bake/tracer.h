@@ -24,8 +24,8 @@ struct Hit {
 // non-finite positions, vertex indices out of range, or a material table that does not match the triangles
 // (triangleMaterial must hold one in-range index per triangle). Zero-area triangles are accepted (never hit).
 //
-// Queries take a unit `dir` and the segment [tnear, tfar] in metres. Callers should set flush-to-zero and
-// denormals-are-zero in tracing threads (every bake entry point does).
+// Queries take a unit `dir` and the segment [tnear, tfar] in metres. Tracing threads should hold a
+// FlushDenormalsScope (every bake entry point does).
 class SceneTracer {
  public:
   explicit SceneTracer(const Scene& scene);
@@ -47,6 +47,20 @@ class SceneTracer {
 
  private:
   std::unique_ptr<Impl> impl_;
+};
+
+// Sets flush-to-zero and denormals-are-zero (x86 MXCSR) on the calling thread while alive and restores the
+// previous mode on destruction. Enter one in every thread that traces (Embree's recommendation); every bake
+// entry point does so itself. A no-op on other architectures.
+class FlushDenormalsScope {
+ public:
+  FlushDenormalsScope();
+  ~FlushDenormalsScope();
+  FlushDenormalsScope(const FlushDenormalsScope&) = delete;
+  FlushDenormalsScope& operator=(const FlushDenormalsScope&) = delete;
+
+ private:
+  unsigned int saved_ = 0;
 };
 
 // Radiance of the sky seen along unit direction `dir`, W/(m^2 sr). Constant sky: scene.skyRadiance.
