@@ -5,6 +5,7 @@
 // References: Veach 1997 (MIS); Welford 1962 ("Note on a method for calculating corrected sums of squares").
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include <glm/geometric.hpp>
 
@@ -46,6 +47,8 @@ ReferenceIrradiance referenceIrradiance(const SceneTracer& tracer, const glm::dv
                                         const BakeOptions& options) {
   if (!finite(point) || !finite(glm::dvec3(normal)) || !(glm::length(normal) > 0.0f))
     throw InputError("reference: non-finite point or zero/non-finite normal");
+  if (options.bounces < 0)
+    throw InputError("reference: bounces must be >= 0 (got " + std::to_string(options.bounces) + ")");
   ReferenceIrradiance out;
   if (samples < 1) return out;
   DenormalScope denormals;

@@ -1,4 +1,5 @@
 // referenceIrradiance: the oracle the evaluation trusts, checked against closed forms.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -61,6 +62,78 @@ TEST(Reference, PunctualIrradianceIsInverseSquareCosine) {
   // Without the DirectPunctual flag the same point gets nothing (no bounce can reach it).
   const ReferenceIrradiance d = referenceIrradiance(tracer, x, {0, 1, 0}, 64, 1, opts(2, kContentDefault));
   EXPECT_EQ(d.irradiance, glm::vec3(0.0f));
+}
+
+// Spot cone falloff and a sun disc with an angular radius: between the cones the spot follows
+// smoothstep(cos outer, cos inner, cos angle); the sun disc, sampled uniformly in its cone of half-angle r
+// around an axis at angle t0 from the normal, averages E cos = E cos(t0) (1 + cos r) / 2. Tolerance 4 sigma +
+// 1e-5 relative.
+TEST(Reference, SpotFalloffAndSunDiscAverageMatchClosedForms) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.8f));
+  test::addGround(s, 0.0f, 100.0f, m);
+  Light spot;
+  spot.type = LightType::kSpot;
+  spot.position = {0.0f, 2.0f, 0.0f};
+  spot.direction = {0, -1, 0};
+  spot.intensity = {8.0f, 8.0f, 8.0f};
+  spot.innerConeRad = 0.3f;
+  spot.outerConeRad = 0.6f;
+  Light sun;
+  sun.type = LightType::kDirectional;
+  sun.direction = glm::normalize(glm::vec3(0.6f, -1.0f, 0.0f));
+  sun.intensity = {0.0f, 5.0f, 0.0f};  // green only, so the red channel checks the spot alone
+  sun.angularRadiusRad = 0.1f;
+  s.lights = {spot, sun};
+  SceneTracer tracer(s);
+  const glm::dvec3 x(0.9, 0.0, 0.0);  // 24.2 degrees off the spot axis: inside the falloff band
+  const ReferenceIrradiance r = referenceIrradiance(tracer, x, {0, 1, 0}, 4096, 2, opts(0, kContentAll));
+  const glm::dvec3 d = glm::dvec3(spot.position) - x;
+  const double dist = glm::length(d), c = d.y / dist;
+  const double t = std::clamp((c - std::cos(0.6)) / (std::cos(0.3) - std::cos(0.6)), 0.0, 1.0);
+  const double spotE = 8.0 * t * t * (3 - 2 * t) * c / (dist * dist);
+  ASSERT_GT(t, 0.05);
+  ASSERT_LT(t, 0.95);
+  EXPECT_NEAR(r.irradiance.x, spotE, 1e-5 * spotE);
+  const double sunE = 5.0 * double(-sun.direction.y) * (1.0 + std::cos(0.1)) / 2.0;
+  EXPECT_NEAR(r.irradiance.y, spotE + sunE, 4 * r.stderror.y + 1e-5 * sunE);
+}
+
+// A gradient sky (zenith Z at +Y, horizon H at and below the horizon, linear in y) integrates in closed form:
+// on an upward plane E = pi H + 2 pi (Z - H) / 3; for a probe in open space L00 = Y00 (4 pi H + pi (Z - H))
+// and L1,-1 (the y coefficient) = Y1 2 pi (Z - H) / 3. Tolerance 4 sigma + 1e-5 relative for E (cosine rays
+// are random), 2e-4 relative for the probe (Fibonacci quadrature of a kinked function, 4096 directions).
+TEST(Reference, GradientSkyIntegratesToClosedForm) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.8f));
+  test::addGround(s, 0.0f, 100.0f, m);
+  s.skyRadiance = {2.0f, 1.0f, 0.5f};
+  s.skyHorizonRadiance = {0.5f, 1.0f, 1.0f};
+  SceneTracer tracer(s);
+  const ReferenceIrradiance r =
+      referenceIrradiance(tracer, {1.0, 0.0, 2.0}, {0, 1, 0}, 4096, 8, opts(2, kContentSky));
+  for (int ch = 0; ch < 3; ++ch) {
+    const double z = s.skyRadiance[ch], h = s.skyHorizonRadiance[ch];
+    const double exact = kPi * h + 2.0 * kPi * (z - h) / 3.0;
+    EXPECT_NEAR(r.irradiance[ch], exact, 4 * r.stderror[ch] + 1e-5 * exact) << "channel " << ch;
+  }
+  // The probe: sky alone, in a scene of one tiny far-away triangle (a tracer needs geometry).
+  Scene open;
+  const uint32_t mo = test::addMaterial(open, glm::vec3(0.8f));
+  test::addTriangle(open, {1000, 1000, 1000}, {1000.1f, 1000, 1000}, {1000, 1000.1f, 1000}, mo);
+  open.skyRadiance = s.skyRadiance;
+  open.skyHorizonRadiance = s.skyHorizonRadiance;
+  SceneTracer openTracer(open);
+  BakeOptions o = opts(2, kContentSky);
+  o.samplesPerProbe = 4096;
+  const auto sh = bakeProbes(openTracer, {glm::dvec3(0.0)}, o);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double z = s.skyRadiance[ch], h = s.skyHorizonRadiance[ch];
+    const double l00 = sh_const::kY00 * (4.0 * kPi * h + kPi * (z - h));
+    const double l1y = sh_const::kY1 * 2.0 * kPi * (z - h) / 3.0;
+    EXPECT_NEAR(sh[0].c[0][ch], l00, 2e-4 * l00) << "channel " << ch;
+    EXPECT_NEAR(sh[0].c[1][ch], l1y, 2e-4 * l00) << "channel " << ch;
+  }
 }
 
 // A ground plane under a uniform sky of radiance S: E = pi S (the cosine-weighted hemisphere integral).

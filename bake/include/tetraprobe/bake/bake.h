@@ -63,7 +63,8 @@ struct ReferenceIrradiance {
 // irradiance (I cos / r^2, sampled only for sun discs and light radii) + pi x the radiance of one
 // cosine-sampled path. Rays start at point + normal x tracer.rayEpsilon(); punctual distances and cosines
 // use the exact point. stderror = sample standard deviation / sqrt(samples) (per-sample variance).
-// Single-threaded (callers parallelise over points). Throws InputError for a non-finite point or normal.
+// Single-threaded (callers parallelise over points). samples < 1 gives zeros with samples = 0. Throws
+// InputError for a non-finite point, a zero or non-finite normal, or bounces < 0.
 ReferenceIrradiance referenceIrradiance(const SceneTracer& tracer, const glm::dvec3& point,
                                         const glm::vec3& normal, int samples, uint64_t seed,
                                         const BakeOptions& options);
