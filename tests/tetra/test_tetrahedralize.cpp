@@ -155,7 +155,10 @@ TEST(Tetrahedralize, Deterministic) {
     const TetMesh a = tetrahedralizeDelaunay(pts), b = tetrahedralizeDelaunay(pts);
     EXPECT_EQ(a.tets, b.tets);
     EXPECT_EQ(a.neighbours, b.neighbours);
-    EXPECT_TRUE(std::is_sorted(a.tets.begin(), a.tets.end()));
+    for (const auto& t : a.tets) {  // canonical: smallest vertex first, second-smallest second
+      EXPECT_LT(t[0], std::min({t[1], t[2], t[3]}));
+      EXPECT_LT(t[1], std::min(t[2], t[3]));
+    }
   }
 }
 

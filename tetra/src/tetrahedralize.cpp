@@ -5,8 +5,8 @@
 //
 // Determinism: CGAL spatially sorts the (point, index) range with a default-seeded generator and breaks
 // cospherical ties by symbolic perturbation, so one input gives one triangulation; the extraction below then
-// puts every tet into a canonical even permutation (orientation kept) and sorts the tets by vertex tuple, so
-// the output does not depend on CGAL's cell storage order either.
+// puts every tet into a canonical even permutation (orientation kept) and sorts the tets by the Morton code
+// of their centroid, then by vertex tuple, so the output does not depend on CGAL's cell storage order either.
 //
 // This is the only translation unit of the module that includes CGAL (it compiles slowly).
 #include "tetraprobe/tetra/tetrahedralize.h"
@@ -23,6 +23,7 @@
 #include <CGAL/Triangulation_cell_base_with_info_3.h>
 #include <CGAL/Triangulation_data_structure_3.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <glm/common.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 
@@ -103,6 +104,26 @@ void canonicalize(RawTet& t) {
   while (t.v[1] > t.v[2] || t.v[1] > t.v[3]) rotate();
 }
 
+// 63-bit Morton code (21 bits per axis, x lowest) of p quantized over [lo, hi].
+uint64_t mortonKey(const glm::dvec3& p, const glm::dvec3& lo, const glm::dvec3& hi) {
+  auto spread = [](uint64_t x) {  // 21 bits -> every third bit
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFull;
+    x = (x | x << 16) & 0x1F0000FF0000FFull;
+    x = (x | x << 8) & 0x100F00F00F00F00Full;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  uint64_t code = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double extent = hi[a] - lo[a];
+    const double f = extent > 0.0 ? std::clamp((p[a] - lo[a]) / extent, 0.0, 1.0) : 0.0;
+    code |= spread(uint64_t(f * double((1u << 21) - 1))) << a;
+  }
+  return code;
+}
+
 }  // namespace
 
 TetMesh tetrahedralizeDelaunay(const std::vector<glm::dvec3>& points) {
@@ -137,11 +158,26 @@ TetMesh tetrahedralizeDelaunay(const std::vector<glm::dvec3>& points) {
     canonicalize(t);  // CGAL's finite cells are positively oriented; even permutations keep that
   }
 
-  // Deterministic order: sort by the canonical vertex tuple, then renumber the neighbours.
+  // Deterministic, cache-friendly order: by the Morton code of the centroid (tets that are close in space are
+  // close in memory, which keeps walks on the CPU and GPU in cache), ties by the canonical vertex tuple. Both
+  // keys are pure functions of the input coordinates. Then renumber the neighbours.
+  glm::dvec3 lo = points[0], hi = points[0];
+  for (const glm::dvec3& p : points) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  std::vector<uint64_t> key(raw.size());
+  for (size_t k = 0; k < raw.size(); ++k) {
+    glm::dvec3 c(0.0);
+    for (int32_t v : raw[k].v) c += points[size_t(v)];
+    key[k] = mortonKey(0.25 * c, lo, hi);
+  }
   std::vector<int32_t> order(raw.size());
   std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&](int32_t a, int32_t b) { return raw[size_t(a)].v < raw[size_t(b)].v; });
+  std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    const size_t ia = size_t(a), ib = size_t(b);
+    return key[ia] != key[ib] ? key[ia] < key[ib] : raw[ia].v < raw[ib].v;
+  });
   std::vector<int32_t> newIndex(raw.size());
   for (size_t k = 0; k < order.size(); ++k) newIndex[size_t(order[k])] = int32_t(k);
 
@@ -182,9 +218,9 @@ std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const Te
     bool finite = det != 0.0 && std::isfinite(det);
     for (int i = 0; i < 3; ++i) {
       // Row i of M is (m[0][i], m[1][i], m[2][i]) in glm's [column][row] indexing, rounded to float. The
-      // offset -(M P3)_i equals 0.25 - M_i . centroid; it is computed from the *rounded* row so that the float
-      // record gives w_i(centroid) = 0.25 up to one rounding of the offset, instead of also carrying the row's
-      // rounding error times the distance from the local origin.
+      // offset -(M P3)_i equals 0.25 - M_i . centroid; it is computed from the *rounded* row so that the
+      // float record gives w_i(centroid) = 0.25 up to one rounding of the offset, instead of also carrying
+      // the row's rounding error times the distance from the local origin.
       for (int j = 0; j < 3; ++j) rec.row[i][j] = float(m[j][i]);
       const double offset = 0.25 - (double(rec.row[i][0]) * centroid.x + double(rec.row[i][1]) * centroid.y +
                                     double(rec.row[i][2]) * centroid.z);

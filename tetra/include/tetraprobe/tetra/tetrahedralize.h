@@ -16,8 +16,9 @@ struct TetMesh {
   // Vertex indices into the input points, positively oriented (orient3d(v0,v1,v2,v3) > 0), where
   // orient3d = det[v1-v0 | v2-v0 | v3-v0]: right-handed, positive signed volume, CGAL::orientation ==
   // POSITIVE (the opposite sign of Shewchuk's orient3d; det[P0-P3 | P1-P3 | P2-P3] of level.h's Tet is
-  // negative). Sorted: each tet is the even permutation with its smallest index first and its second-smallest
-  // second, and the tets are in lexicographic order of these tuples.
+  // negative). Canonical: each tet is the even permutation with its smallest index first and its
+  // second-smallest second. Tets are in Morton order of their centroids (spatially coherent walks on the CPU
+  // and GPU), ties in order of those tuples.
   std::vector<std::array<int32_t, 4>> tets;
   // neighbours[t][i]: the tet sharing the face opposite tets[t][i], or -1 on the convex hull.
   std::vector<std::array<int32_t, 4>> neighbours;
