@@ -1,1 +1,155 @@
-// (being written)
+// Vulkan upload of a level's tets, SH and start grid into the storage buffers shaders/tetraprobe_layout.glsl
+// declares (host-visible coherent memory, one allocation per buffer).
+#include "tetraprobe/runtime/vulkan_upload.h"
+
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
+namespace tetraprobe {
+namespace {
+
+const char* bindingName(int i) {
+  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid"};
+  return kNames[i];
+}
+
+bool findHostMemoryType(VkPhysicalDevice physicalDevice, uint32_t typeBits, uint32_t* index) {
+  VkPhysicalDeviceMemoryProperties props;
+  vkGetPhysicalDeviceMemoryProperties(physicalDevice, &props);
+  const VkMemoryPropertyFlags want =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  for (uint32_t i = 0; i < props.memoryTypeCount; ++i) {
+    if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) {
+      *index = i;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Creates one buffer holding `bytes` (zero-padded to `size`).
+VkResult createFilledBuffer(VkPhysicalDevice physicalDevice, VkDevice device, const std::vector<char>& bytes,
+                            VkDeviceSize size, VkBuffer* buffer, VkDeviceMemory* memory, std::string* what) {
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = size;
+  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkResult r = vkCreateBuffer(device, &info, nullptr, buffer);
+  if (r != VK_SUCCESS) return *what = "vkCreateBuffer failed", r;
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device, *buffer, &req);
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  if (!findHostMemoryType(physicalDevice, req.memoryTypeBits, &alloc.memoryTypeIndex))
+    return *what = "no host-visible coherent memory type", VK_ERROR_FEATURE_NOT_PRESENT;
+  r = vkAllocateMemory(device, &alloc, nullptr, memory);
+  if (r != VK_SUCCESS) return *what = "vkAllocateMemory failed", r;
+  r = vkBindBufferMemory(device, *buffer, *memory, 0);
+  if (r != VK_SUCCESS) return *what = "vkBindBufferMemory failed", r;
+  void* mapped = nullptr;
+  r = vkMapMemory(device, *memory, 0, VK_WHOLE_SIZE, 0, &mapped);
+  if (r != VK_SUCCESS) return *what = "vkMapMemory failed", r;
+  std::memset(mapped, 0, size_t(size));
+  if (!bytes.empty()) std::memcpy(mapped, bytes.data(), bytes.size());
+  vkUnmapMemory(device, *memory);
+  return VK_SUCCESS;
+}
+
+template <typename T>
+void appendBytes(std::vector<char>& out, const T* data, size_t count) {
+  const auto* p = reinterpret_cast<const char*>(data);
+  out.insert(out.end(), p, p + sizeof(T) * count);
+}
+
+}  // namespace
+
+VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
+                            const StartGrid& grid, VulkanLevelBuffers& out, std::string* error,
+                            int32_t maxWalkSteps) {
+  out = VulkanLevelBuffers{};
+  const size_t cells =
+      size_t(std::max(grid.dims.x, 0)) * size_t(std::max(grid.dims.y, 0)) * size_t(std::max(grid.dims.z, 0));
+  if (!level.tets.empty() && (cells == 0 || grid.startTet.size() != cells)) {
+    if (error) *error = "start grid does not match its dims (build it with ProbeQuery on this level)";
+    return VK_ERROR_INITIALIZATION_FAILED;
+  }
+
+  std::vector<char> data[kGpuBindingCount];
+  appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
+  appendBytes(data[kGpuBindingSh], level.sh.data(), level.sh.size());
+  GpuGridHeader header{};
+  for (int i = 0; i < 3; ++i) {
+    header.min[i] = grid.min[i];
+    header.cellSize[i] = grid.cellSize[i];
+    header.dims[i] = grid.dims[i];
+  }
+  header.tetCount = int32_t(level.tets.size());
+  header.probeCount = int32_t(level.probes.size());
+  header.maxWalkSteps = maxWalkSteps;
+  appendBytes(data[kGpuBindingGrid], &header, 1);
+  appendBytes(data[kGpuBindingGrid], grid.startTet.data(), grid.startTet.size());
+
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(physicalDevice, &props);
+  for (int i = 0; i < int(kGpuBindingCount); ++i) {
+    // Never zero-sized (Vulkan forbids it); rounded up to 64 bytes.
+    const VkDeviceSize size = std::max<VkDeviceSize>(64, (data[i].size() + 63) / 64 * 64);
+    if (size > props.limits.maxStorageBufferRange) {
+      destroyLevelBuffers(device, out);
+      if (error)
+        *error = std::string(bindingName(i)) + " buffer needs " + std::to_string(size) +
+                 " bytes, over the device's maxStorageBufferRange " +
+                 std::to_string(props.limits.maxStorageBufferRange);
+      return VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    }
+    std::string what;
+    const VkResult r =
+        createFilledBuffer(physicalDevice, device, data[i], size, &out.buffers[i], &out.memory[i], &what);
+    if (r != VK_SUCCESS) {
+      destroyLevelBuffers(device, out);
+      if (error)
+        *error = std::string(bindingName(i)) + " buffer: " + what + " (VkResult " + std::to_string(r) + ")";
+      return r;
+    }
+    out.sizes[i] = size;
+  }
+  return VK_SUCCESS;
+}
+
+void destroyLevelBuffers(VkDevice device, VulkanLevelBuffers& buffers) {
+  for (int i = 0; i < int(kGpuBindingCount); ++i) {
+    if (buffers.buffers[i] != VK_NULL_HANDLE) vkDestroyBuffer(device, buffers.buffers[i], nullptr);
+    if (buffers.memory[i] != VK_NULL_HANDLE) vkFreeMemory(device, buffers.memory[i], nullptr);
+  }
+  buffers = VulkanLevelBuffers{};
+}
+
+void levelDescriptorBindings(VkShaderStageFlags stages, uint32_t firstBinding,
+                             VkDescriptorSetLayoutBinding out[kGpuBindingCount]) {
+  for (uint32_t i = 0; i < kGpuBindingCount; ++i) {
+    out[i] = VkDescriptorSetLayoutBinding{};
+    out[i].binding = firstBinding + i;
+    out[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    out[i].descriptorCount = 1;
+    out[i].stageFlags = stages;
+  }
+}
+
+void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstBinding,
+                           const VulkanLevelBuffers& buffers) {
+  VkDescriptorBufferInfo infos[kGpuBindingCount];
+  VkWriteDescriptorSet writes[kGpuBindingCount];
+  for (uint32_t i = 0; i < kGpuBindingCount; ++i) {
+    infos[i] = VkDescriptorBufferInfo{buffers.buffers[i], 0, buffers.sizes[i]};
+    writes[i] = VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstSet = set;
+    writes[i].dstBinding = firstBinding + i;
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(device, kGpuBindingCount, writes, 0, nullptr);
+}
+
+}  // namespace tetraprobe

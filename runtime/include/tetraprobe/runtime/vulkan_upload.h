@@ -1,0 +1,53 @@
+// Vulkan upload of a loaded level: the three storage buffers shaders/tetraprobe.glsl reads, and the
+// descriptor-set plumbing for them. Permissive: Vulkan, GLM and the standard library only.
+//
+// Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written once through a
+// mapping (no staging copy yet; on a discrete GPU the shader then reads over the bus; a later version may add
+// a staging upload to DEVICE_LOCAL memory). Errors are returned as VkResult (no exceptions), with a one-line
+// message when `error` is given.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <vulkan/vulkan.h>
+
+#include "tetraprobe/runtime/gpu_layout.h"
+#include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+
+// The walk bound written into the grid header (tetraprobeMaxWalkSteps): kMaxWalkSteps of
+// runtime/src/query.cpp.
+inline constexpr int32_t kGpuDefaultMaxWalkSteps = 4096;
+
+struct VulkanLevelBuffers {
+  VkBuffer buffers[kGpuBindingCount] = {};  // indexed by GpuBinding
+  VkDeviceMemory memory[kGpuBindingCount] = {};
+  VkDeviceSize sizes[kGpuBindingCount] = {};  // bytes bound to each binding (at least 64, never 0)
+};
+
+// Creates and fills the buffers of `level` (tets, SH) and `grid` (ProbeQuery::startGrid() of a query built
+// on the same level). Positions stay in the level's local frame. An empty level (no tets) gives valid buffers
+// with tetCount 0, for which the shader returns E = 0. Fails with VK_ERROR_OUT_OF_DEVICE_MEMORY when a buffer
+// exceeds the device's maxStorageBufferRange (lavapipe: 128 MiB, about 1.6 M tets) or memory runs out; on
+// failure nothing is left allocated and `out` is reset.
+VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
+                            const StartGrid& grid, VulkanLevelBuffers& out, std::string* error = nullptr,
+                            int32_t maxWalkSteps = kGpuDefaultMaxWalkSteps);
+
+// Destroys the buffers and frees their memory (null handles are skipped); resets `buffers`. The device must
+// no longer use them.
+void destroyLevelBuffers(VkDevice device, VulkanLevelBuffers& buffers);
+
+// Fills out[0..2] with the layout bindings for firstBinding + 0, 1, 2 (TETRAPROBE_BINDING in the shader):
+// read-only storage buffers visible to `stages`. Append them to the engine's VkDescriptorSetLayoutCreateInfo.
+void levelDescriptorBindings(VkShaderStageFlags stages, uint32_t firstBinding,
+                             VkDescriptorSetLayoutBinding out[kGpuBindingCount]);
+
+// Points bindings firstBinding + 0, 1, 2 of `set` at the buffers (one vkUpdateDescriptorSets call).
+void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstBinding,
+                           const VulkanLevelBuffers& buffers);
+
+}  // namespace tetraprobe

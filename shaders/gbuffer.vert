@@ -1,0 +1,21 @@
+#version 450
+// gbuffer.vert: transforms level-local triangle-soup vertices; passes local position, flat normal and albedo.
+
+layout(location = 0) in vec3 inPosition;  // level local frame, metres
+layout(location = 1) in vec3 inNormal;    // the triangle's unit normal (same on its three vertices)
+layout(location = 2) in vec3 inAlbedo;    // the triangle's albedo (linear RGB)
+
+layout(push_constant) uniform GbufferPush {
+  mat4 viewProj;  // local frame -> Vulkan clip space (y down, depth 0..1)
+};
+
+layout(location = 0) out vec3 outLocalPos;
+layout(location = 1) flat out vec3 outNormal;
+layout(location = 2) flat out vec3 outAlbedo;
+
+void main() {
+  outLocalPos = inPosition;
+  outNormal = inNormal;
+  outAlbedo = inAlbedo;
+  gl_Position = viewProj * vec4(inPosition, 1.0);
+}

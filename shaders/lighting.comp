@@ -1,0 +1,36 @@
+#version 450
+// lighting.comp: full-screen pass over the G-buffer; per pixel irradiance (mode 0) or albedo * E / pi (mode 1).
+
+#extension GL_GOOGLE_include_directive : require
+#define TETRAPROBE_SET 0
+#define TETRAPROBE_BINDING 0
+#include "tetraprobe.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rgba32f) uniform readonly image2D gPosition;  // local frame; a = 1 on geometry
+layout(set = 1, binding = 1, rgba32f) uniform readonly image2D gNormal;
+layout(set = 1, binding = 2, rgba32f) uniform readonly image2D gAlbedo;
+layout(set = 1, binding = 3, rgba32f) uniform writeonly image2D outColor;
+
+layout(push_constant) uniform LightingPush {
+  ivec2 size;  // pixels
+  int mode;    // 0: irradiance E (W/m^2); 1: indirect outgoing radiance albedo * E / pi (W/(m^2 sr))
+};
+
+void main() {
+  ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+  if (px.x >= size.x || px.y >= size.y) return;
+  vec4 p = imageLoad(gPosition, px);
+  if (p.a == 0.0) {
+    imageStore(outColor, px, vec4(0.0));
+    return;
+  }
+  vec3 n = imageLoad(gNormal, px).xyz;
+  vec3 e = tetraprobeIrradiance(p.xyz, n);
+  if (mode == 1) {
+    precise vec3 l = imageLoad(gAlbedo, px).rgb * e / 3.141592653589793;
+    e = l;
+  }
+  imageStore(outColor, px, vec4(e, 1.0));
+}

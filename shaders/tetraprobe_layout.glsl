@@ -1,0 +1,48 @@
+// tetraprobe_layout.glsl: the GPU buffers of one uploaded level (std430). Mirrored field for field, with sizes
+// and offsets static_assert'ed, in runtime/include/tetraprobe/runtime/gpu_layout.h. Permissive.
+//
+// Bindings (all storage buffers, read-only) in descriptor set TETRAPROBE_SET:
+//   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 80 bytes each (tetraprobe::Tet)
+//   TETRAPROBE_BINDING + 1  TetraprobeSh    27 floats per probe: coefficient-major, then r,g,b (tetraprobe::ShRgb)
+//   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
+// Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
+#ifndef TETRAPROBE_LAYOUT_GLSL
+#define TETRAPROBE_LAYOUT_GLSL
+
+#ifndef TETRAPROBE_SET
+#define TETRAPROBE_SET 0
+#endif
+#ifndef TETRAPROBE_BINDING
+#define TETRAPROBE_BINDING 0
+#endif
+
+// One tetrahedron. v: probe indices; n[i]: the tet across the face opposite v[i], -1 on the hull.
+// Barycentrics of local point X: w_i = dot(row[i].xyz, X) + row[i].w (i = 0..2), w_3 = 1 - w_0 - w_1 - w_2.
+struct TetraprobeTet {
+  ivec4 v;       // offset 0
+  ivec4 n;       // offset 16
+  vec4 row[3];   // offset 32; 80 bytes in all
+};
+
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly buffer TetraprobeTets {
+  TetraprobeTet tetraprobeTets[];
+};
+
+// Probe p, coefficient i (index l*(l+1)+m), channel c (0 r, 1 g, 2 b) is at 27 * p + 3 * i + c.
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 1) readonly buffer TetraprobeSh {
+  float tetraprobeSh[];
+};
+
+// The start grid (tetraprobe::StartGrid): cell (x,y,z) of `dims` covers gridMin + [x,x+1) * cellSize, and
+// names the tet the walk starts from at index x + dims.x * (y + dims.y * z).
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 2) readonly buffer TetraprobeGrid {
+  vec3 tetraprobeGridMin;       // offset 0, local frame, metres
+  int tetraprobeTetCount;       // offset 12
+  vec3 tetraprobeGridCellSize;  // offset 16, metres
+  int tetraprobeProbeCount;     // offset 28
+  ivec3 tetraprobeGridDims;     // offset 32
+  int tetraprobeMaxWalkSteps;   // offset 44: the walk's bound (same as the CPU query's)
+  int tetraprobeStartTet[];     // offset 48
+};
+
+#endif  // TETRAPROBE_LAYOUT_GLSL
