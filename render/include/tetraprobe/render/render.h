@@ -1,0 +1,83 @@
+// Headless Vulkan renderer for tetraprobe levels: rasterizes a triangle mesh into a G-buffer and lights every
+// pixel with the per-pixel probe lookup of shaders/tetraprobe.glsl (the same include engines use), then reads
+// the images back. Also image output (PNG, EXR). Permissive: runtime + Vulkan + stb/tinyexr.
+//
+// Frames and units: mesh and camera in world metres (right-handed); the renderer subtracts Level::origin (in
+// double) so the GPU works in the level's local frame. Images are linear float RGBA, row 0 = top.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+
+// Triangles to render. Front faces are counter-clockwise seen from the front (normal = (b-a) x (c-a));
+// back faces are culled. Each triangle is shaded with its flat normal and triangleAlbedo (linear RGB).
+struct RenderMesh {
+  std::vector<glm::vec3> positions;       // world metres
+  std::vector<glm::uvec3> triangles;      // indices into positions
+  std::vector<glm::vec3> triangleAlbedo;  // one per triangle; missing entries default to 0.8 grey
+};
+
+enum class RenderMode {
+  kIrradiance,  // E in W/m^2
+  kIndirect,    // Lambertian outgoing radiance albedo * E / pi in W/(m^2 sr)
+};
+
+struct RenderView {
+  glm::vec3 eye{0.0f, 0.0f, 5.0f};  // world metres
+  glm::vec3 target{0.0f};           // world metres
+  glm::vec3 up{0, 1, 0};
+  float fovYDeg = 60;  // vertical field of view; near/far planes are fitted to the mesh bounds
+  int width = 960, height = 540;
+  RenderMode mode = RenderMode::kIndirect;
+};
+
+// Linear float RGBA, row-major, row 0 = top: rgba[4 * (y * width + x) + c].
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgba;
+};
+
+// Wall-clock and GPU times of one renderLevel call, milliseconds. GPU times come from timestamp queries (0
+// when the queue has none) and include lavapipe's lazy shader JIT, which runs at the first draw/dispatch.
+struct RenderTimings {
+  double totalMs = 0;     // whole call: device, upload, pipelines, render, readback, object cleanup
+  double gbufferMs = 0;   // GPU: G-buffer render pass
+  double lightingMs = 0;  // GPU: lighting compute pass
+};
+
+struct RenderResult {
+  Image color;     // per RenderView::mode; a = 1 on geometry; background pixels are 0 (all four channels)
+  Image position;  // level local frame, metres; a = 1 where geometry, all 0 elsewhere
+  Image normal;    // unit normal of the visible triangle (a = 1 where geometry)
+  Image albedo;    // albedo of the visible triangle (a = 1 where geometry)
+  RenderTimings timings;
+};
+
+// Renders `mesh` lit by `level` (whose ProbeQuery `query` provides the start grid) from `view`. Creates its
+// own Vulkan instance (no surface) and device (prefers lavapipe, else the first device with a
+// graphics+compute queue), and destroys every Vulkan object before returning. Set TETRAPROBE_VK_VALIDATION=1
+// to enable VK_LAYER_KHRONOS_validation when installed. Throws std::runtime_error with a one-line message on
+// failure (no Vulkan device, bad view size, out of memory, ...).
+RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
+                         const RenderView& view);
+
+// Scale that maps the 95th percentile of luminance (Rec. 709 weights) over geometry pixels (a > 0) to 0.8.
+// Returns 1 when there is no geometry or the percentile is not positive.
+float autoExposure(const Image& image);
+
+// Writes an 8-bit sRGB RGB PNG: per channel v = x * exposure, clamped to >= 0, Reinhard v / (1 + v), then the
+// sRGB transfer function, rounded. Written atomically (tetraprobe::writeFileAtomic). Returns false and sets
+// `error` (one line) on failure.
+bool writePng(const std::string& path, const Image& image, float exposure, std::string* error);
+
+// Writes linear 32-bit float RGBA OpenEXR (ZIP compression) atomically. Returns false and sets `error`.
+bool writeExr(const std::string& path, const Image& image, std::string* error);
+
+}  // namespace tetraprobe
