@@ -4,8 +4,8 @@
 //
 // Numerics: the stored rows are float (the GPU's layout); the CPU evaluates them in double on the
 // double-precision local point, so its only float error is the rows' own rounding. A walk is bounded
-// (kMaxWalkSteps) and checked for cycles (Brent); either ends in a brute-force scan, so every query
-// terminates with a defined answer.
+// (kMaxWalkSteps) and checked for cycles (Brent); a cycle is answered by the best tet on it (see walk()),
+// and anything else ends in a brute-force scan, so every query terminates with a defined answer.
 #include "tetraprobe/runtime/query.h"
 
 #include <algorithm>
@@ -22,9 +22,11 @@ namespace tetraprobe {
 namespace {
 
 constexpr int kMaxWalkSteps = 4096;
-constexpr double kInsideEps = 1e-6;      // a weight >= -kInsideEps counts as inside (Location::inside)
-constexpr double kProbesPerCell = 12.0;  // start grid density (8-16 probes per cell)
-constexpr int kMaxGridDim = 1024;        // per axis
+constexpr int kMaxHintSteps = 256;        // a hint's walk, before falling back to the start grid
+constexpr double kCycleAcceptEps = 1e-4;  // a walk cycle is answered by its best tet if within this
+constexpr double kInsideEps = 1e-6;       // a weight >= -kInsideEps counts as inside (Location::inside)
+constexpr double kProbesPerCell = 12.0;   // start grid density (8-16 probes per cell)
+constexpr int kMaxGridDim = 1024;         // per axis
 constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
@@ -88,6 +90,60 @@ int32_t gridCell(const StartGrid& g, const glm::dvec3& x) {
     c[a] = int(std::clamp(f, 0.0, double(g.dims[a] - 1)));  // clamp in double: no overflowing int conversion
   }
   return c[0] + g.dims.x * (c[1] + g.dims.y * c[2]);
+}
+
+// Walks from tet `cur` towards x, stepping across the face opposite the most negative weight. Float rows
+// (rounded independently per tet) can leave slivers' shared faces with slightly disagreeing planes: a point
+// in such a gap is claimed by no tet, and the walk cycles around it. A cycle therefore answers with the tet
+// along the walk that holds x best (largest smallest weight), if it holds it within kCycleAcceptEps;
+// otherwise (or after maxSteps) the walk returns false and the caller scans.
+bool walk(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, int maxSteps, Location& out) {
+  int32_t saved = cur;  // Brent's cycle detection: compare against a checkpoint moved at powers of two
+  int power = 1, lam = 0;
+  int32_t best = -1;
+  double bestMin = -std::numeric_limits<double>::infinity(), bestW[4] = {};
+  for (int step = 0; step < maxSteps; ++step) {
+    double w[4];
+    tetWeights(tets[size_t(cur)], x, w);
+    const int m = minIndex(w);
+    const int32_t next = tets[size_t(cur)].n[m];
+    if (w[m] >= -kInsideEps || std::isnan(w[m])) {
+      // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
+      // whichever tet holds it better, so the answer does not depend on the side the walk came from.
+      if (w[m] < 0.0 && next >= 0) {
+        double wn[4];
+        tetWeights(tets[size_t(next)], x, wn);
+        if (wn[minIndex(wn)] > w[m]) {
+          out = finish(next, wn, true);
+          return true;
+        }
+      }
+      out = finish(cur, w, true);
+      return true;
+    }
+    if (next < 0) {  // leaving through a hull face: the point is outside the (convex) hull
+      out = finish(cur, w, false);
+      return true;
+    }
+    if (w[m] > bestMin) {
+      best = cur;
+      bestMin = w[m];
+      std::copy(w, w + 4, bestW);
+    }
+    assert(size_t(next) < tets.size());
+    cur = next;
+    if (cur == saved) {  // a cycle: every tet on it has been visited, so `best` is the best of them
+      if (bestMin < -kCycleAcceptEps) return false;
+      out = finish(best, bestW, bestMin >= -kInsideEps);
+      return true;
+    }
+    if (++lam == power) {
+      saved = cur;
+      power *= 2;
+      lam = 0;
+    }
+  }
+  return false;
 }
 
 Location scanAll(const Level& level, const glm::dvec3& x) {
@@ -210,37 +266,14 @@ Location ProbeQuery::bruteForceLocate(const glm::dvec3& world) const {
 }
 
 Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
-  const std::vector<Tet>& tets = level_.tets;
-  if (tets.empty()) return Location{};
+  if (level_.tets.empty()) return Location{};
   const glm::dvec3 x = sanitize(world - level_.origin, grid_);
-  int32_t cur = (hint >= 0 && size_t(hint) < tets.size()) ? hint : grid_.startTet[size_t(gridCell(grid_, x))];
-  int32_t saved = cur;  // Brent's cycle detection: compare against a checkpoint moved at powers of two
-  int power = 1, lam = 0;
-  for (int step = 0; step < kMaxWalkSteps; ++step) {
-    double w[4];
-    tetWeights(tets[size_t(cur)], x, w);
-    const int m = minIndex(w);
-    const int32_t next = tets[size_t(cur)].n[m];
-    if (w[m] >= -kInsideEps || std::isnan(w[m])) {
-      // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
-      // whichever tet holds it better, so the answer does not depend on the side the walk came from.
-      if (w[m] < 0.0 && next >= 0) {
-        double wn[4];
-        tetWeights(tets[size_t(next)], x, wn);
-        if (wn[minIndex(wn)] > w[m]) return finish(next, wn, true);
-      }
-      return finish(cur, w, true);
-    }
-    if (next < 0) return finish(cur, w, false);  // leaving through a hull face: the point is outside the hull
-    assert(size_t(next) < tets.size());
-    cur = next;
-    if (cur == saved) break;  // cycle (floating-point walks can loop)
-    if (++lam == power) {
-      saved = cur;
-      power *= 2;
-      lam = 0;
-    }
-  }
+  Location loc;
+  // A hint gets a short budget (a stale hint from an object that moved far should not cost a long walk),
+  // then the start grid gets the full one, then the O(tets) scan.
+  const std::vector<Tet>& tets = level_.tets;
+  if (hint >= 0 && size_t(hint) < tets.size() && walk(tets, x, hint, kMaxHintSteps, loc)) return loc;
+  if (walk(tets, x, grid_.startTet[size_t(gridCell(grid_, x))], kMaxWalkSteps, loc)) return loc;
   return scanAll(level_, x);
 }
 

@@ -157,6 +157,8 @@ TEST(Locate, OutsideHullIsFiniteAndNormalized) {
         const Location loc = q.locate(x);
         expectValid(*level, loc, x);
         EXPECT_FALSE(loc.inside);
+        const int32_t* n = level->tets[size_t(loc.tet)].n;  // the answer comes from a tet on the hull
+        EXPECT_TRUE(n[0] < 0 || n[1] < 0 || n[2] < 0 || n[3] < 0) << "tet " << loc.tet;
         expectValid(*level, q.bruteForceLocate(x), x);
       }
     }
