@@ -1,0 +1,56 @@
+// Minimal command-line parsing for the tetraprobe subcommands: declared options with help text, positional
+// arguments, and one-line usage errors (exit code 2).
+#pragma once
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace tetraprobe::cli {
+
+// Bad usage: unknown option, missing value, malformed number. The CLI prints it and exits with 2.
+class UsageError : public std::runtime_error {
+ public:
+  explicit UsageError(const std::string& what) : std::runtime_error(what) {}
+};
+
+struct OptionSpec {
+  std::string name;  // "--spacing" (and optional short alias in `alias`, e.g. "-o")
+  std::string alias;
+  std::string valueName;  // empty for a flag
+  std::string help;
+  std::string defaultValue;
+};
+
+class Args {
+ public:
+  // `usage`: "tetraprobe bake SCENE -o LEVEL.tpb [options]"; `summary`: one paragraph.
+  Args(std::string usage, std::string summary, std::vector<OptionSpec> options);
+
+  // Parses argv (after the subcommand). Returns false when --help was asked (help already printed to stdout).
+  bool parse(int argc, char** argv);
+
+  const std::vector<std::string>& positional() const { return positional_; }
+  void requirePositional(size_t min, size_t max) const;
+
+  bool has(const std::string& name) const;
+  std::string str(const std::string& name) const;  // value or default
+  double number(const std::string& name) const;
+  int integer(const std::string& name) const;
+  glm::vec3 vec3(const std::string& name) const;  // "x,y,z"
+  void printHelp() const;
+
+ private:
+  const OptionSpec& spec(const std::string& name) const;
+  std::string usage_, summary_;
+  std::vector<OptionSpec> options_;
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+};
+
+double parseNumber(const std::string& text, const std::string& what);
+
+}  // namespace tetraprobe::cli

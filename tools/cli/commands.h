@@ -1,0 +1,20 @@
+// The tetraprobe subcommands. Each takes the arguments after its name and returns the process exit code;
+// errors propagate as exceptions that main() maps to exit codes (usage/input -> 2, other -> 1).
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace tetraprobe::cli {
+
+int cmdBake(int argc, char** argv);
+int cmdInspect(int argc, char** argv);
+int cmdQuery(int argc, char** argv);
+int cmdRender(int argc, char** argv);
+int cmdEval(int argc, char** argv);
+
+// Writes a JSON report atomically (2-space indent, trailing newline); throws on failure.
+void writeJsonReport(const std::string& path, const nlohmann::json& report);
+
+}  // namespace tetraprobe::cli
