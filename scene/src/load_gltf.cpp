@@ -421,7 +421,18 @@ Scene loadGltf(const std::string& path, const MeshOptions& options) {
   }
 
   Context ctx{model, path, scene, {}, UINT32_MAX, {}, {}, 0, 0};
+  for (const std::string& ext : model.extensionsRequired) {
+    if (ext != "KHR_lights_punctual" && ext != "KHR_materials_emissive_strength" &&
+        ext != "KHR_texture_transform" && ext != "KHR_materials_pbrSpecularGlossiness" &&
+        ext != "KHR_materials_unlit")
+      throw InputError(path + ": requires unsupported glTF extension " + ext);
+  }
   convertMaterials(ctx, options.textures);
+  size_t translucent = 0;
+  for (const auto& m : model.materials) translucent += m.alphaMode == "BLEND" || m.alphaMode == "MASK";
+  if (translucent > 0)
+    scene.warnings.push_back(path + ": " + std::to_string(translucent) +
+                             " material(s) with alphaMode BLEND/MASK treated as opaque");
 
   std::vector<int> roots;
   int sceneIndex = model.defaultScene;

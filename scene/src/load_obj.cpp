@@ -144,6 +144,7 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
 
   TextureMeans textures(dir, scene);
   scene.materials.reserve(objMaterials.size() + 1);
+  size_t translucent = 0;
   for (const tinyobj::material_t& m : objMaterials) {
     Material out;
     out.name = m.name;
@@ -155,8 +156,12 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
     if (options.textures && !m.emissive_texname.empty() && out.emission != glm::vec3(0.0f)) {
       if (auto mean = textures.get(m.emissive_texname, m.name)) out.emission *= *mean;
     }
+    translucent += m.dissolve < 1.0f;
     scene.materials.push_back(out);
   }
+  if (translucent > 0)
+    scene.warnings.push_back(path + ": " + std::to_string(translucent) +
+                             " material(s) with d < 1 treated as opaque");
   const uint32_t materialCount = static_cast<uint32_t>(scene.materials.size());
   uint32_t defaultMaterial = UINT32_MAX;
 

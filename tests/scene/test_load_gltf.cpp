@@ -261,6 +261,15 @@ TEST(LoadGltf, NodeCycleIsInputError) {
   EXPECT_NE(msg.find("cycle"), std::string::npos) << msg;
 }
 
+// Draco or quantized meshes cannot be read as float positions: a required extension must fail loudly.
+TEST(LoadGltf, UnsupportedRequiredExtensionIsInputError) {
+  const auto bin = triangleBuffer();
+  const std::string json = gltfJson(embedded(bin), bin.size(), R"({"mesh": 0})", R"(,
+  "extensionsRequired": ["KHR_draco_mesh_compression"])");
+  const std::string msg = loadError(writeText(freshDir() / "draco.gltf", json));
+  EXPECT_NE(msg.find("KHR_draco_mesh_compression"), std::string::npos) << msg;
+}
+
 TEST(LoadGltf, MalformedJsonIsInputError) {
   const std::string msg = loadError(writeText(freshDir() / "bad.gltf", "{ \"asset\": { \"version\": "));
   EXPECT_NE(msg.find("bad.gltf"), std::string::npos) << msg;
