@@ -3,6 +3,7 @@
 // range), then tinyobjloader reads and triangulates polygons. Materials: Kd (x the mean linear colour of
 // map_Kd, as the MTL specification multiplies them) -> albedo; Ke (x the mean of map_Ke) -> emitted radiance
 // in W/(m^2 sr) taken as is. A missing MTL or image is a warning. Texture means are computed once per file.
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -22,8 +23,10 @@ namespace tetraprobe::detail {
 
 namespace {
 
-// Pre-scan: throws InputError "<path>: line N: <problem>" for bad vertices and face indices.
-void prescanObj(const std::string& path) {
+// Pre-scan: throws InputError "<path>: line N: <problem>" for bad vertices and face indices. Returns the
+// folders (relative to the OBJ) of the material libraries it names, where their textures may also live.
+std::vector<std::filesystem::path> prescanObj(const std::string& path) {
+  std::vector<std::filesystem::path> mtlDirs;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open file");
   std::string line;
@@ -35,6 +38,17 @@ void prescanObj(const std::string& path) {
     ++lineNo;
     size_t i = line.find_first_not_of(" \t");
     if (i == std::string::npos || i + 1 >= line.size()) continue;
+    if (line.compare(i, 7, "mtllib ") == 0) {
+      std::istringstream names(line.substr(i + 7));
+      std::string name;
+      while (names >> name) {
+        std::replace(name.begin(), name.end(), '\\', '/');
+        const auto dir = std::filesystem::path(name).parent_path();
+        if (!dir.empty() && std::find(mtlDirs.begin(), mtlDirs.end(), dir) == mtlDirs.end())
+          mtlDirs.push_back(dir);
+      }
+      continue;
+    }
     const char kind = line[i];
     if ((kind != 'v' && kind != 'f') || (line[i + 1] != ' ' && line[i + 1] != '\t')) continue;
     const char* p = line.c_str() + i + 2;
@@ -75,18 +89,24 @@ void prescanObj(const std::string& path) {
   if (maxIndex > vertices)
     throw InputError(path + ": line " + std::to_string(maxIndexLine) + ": vertex index " +
                      std::to_string(maxIndex) + " out of range (" + std::to_string(vertices) + " vertices)");
+  return mtlDirs;
 }
 
 // Mean linear colour of a texture named in the MTL, cached per resolved file. nullopt (+ warning) on failure.
 class TextureMeans {
  public:
-  TextureMeans(std::filesystem::path baseDir, Scene& scene) : baseDir_(std::move(baseDir)), scene_(scene) {}
+  // Textures are looked up relative to `baseDir` (the OBJ's folder), then to each of `extraDirs` below it.
+  TextureMeans(std::filesystem::path baseDir, std::vector<std::filesystem::path> extraDirs, Scene& scene)
+      : baseDir_(std::move(baseDir)), extraDirs_(std::move(extraDirs)), scene_(scene) {}
 
   std::optional<glm::vec3> get(const std::string& name, const std::string& material) {
     auto it = byName_.find(name);
     if (it != byName_.end()) return it->second;
     std::optional<glm::vec3> mean;
-    if (auto file = resolveTexturePath(baseDir_, name)) {
+    std::optional<std::filesystem::path> file = resolveTexturePath(baseDir_, name);
+    for (size_t i = 0; !file && i < extraDirs_.size(); ++i)
+      file = resolveTexturePath(baseDir_ / extraDirs_[i], name);
+    if (file) {
       std::string error;
       mean = meanLinearColorFile(*file, error);
       if (!mean) scene_.warnings.push_back("material '" + material + "': texture " + error);
@@ -100,6 +120,7 @@ class TextureMeans {
 
  private:
   std::filesystem::path baseDir_;
+  std::vector<std::filesystem::path> extraDirs_;
   Scene& scene_;
   std::map<std::string, std::optional<glm::vec3>> byName_;
 };
@@ -115,7 +136,7 @@ void splitWarnings(const std::string& text, const std::string& path, Scene& scen
 }  // namespace
 
 Scene loadObj(const std::string& path, const MeshOptions& options) {
-  prescanObj(path);
+  std::vector<std::filesystem::path> mtlDirs = prescanObj(path);
 
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
   std::string mtlDir = dir.string();
@@ -142,7 +163,7 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
     scene.positions[i] =
         glm::vec3(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
 
-  TextureMeans textures(dir, scene);
+  TextureMeans textures(dir, std::move(mtlDirs), scene);
   scene.materials.reserve(objMaterials.size() + 1);
   size_t translucent = 0;
   for (const tinyobj::material_t& m : objMaterials) {

@@ -102,6 +102,18 @@ TEST(LoadObj, TexturePathWithBackslashesAndOddCaseResolves) {
   EXPECT_FALSE(anyWarningContains(s, "not found"));
 }
 
+// A material library in a subfolder names its textures relative to itself.
+TEST(LoadObj, TextureBesideMtlInSubfolderResolves) {
+  const auto dir = freshDir();
+  writePng(dir / "materials" / "half.png", 2, 2, halfTexture());
+  writeText(dir / "materials" / "m.mtl", "newmtl textured\nKd 1 1 1\nmap_Kd half.png\n");
+  const Scene s = loadScene(writeText(
+      dir / "q.obj", "mtllib materials/m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl textured\nf 1 2 3\n"));
+  ASSERT_NE(findMaterial(s, "textured"), nullptr);
+  EXPECT_NEAR(findMaterial(s, "textured")->albedo.x, 0.5f, 1e-5f);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+}
+
 TEST(LoadObj, MissingTextureIsWarningNotFailure) {
   const auto dir = freshDir();
   writeText(dir / "m.mtl", "newmtl textured\nKd 0.3 0.4 0.5\nmap_Kd nowhere.png\nnewmtl glow\nKe 1 1 1\n");
