@@ -168,3 +168,27 @@ TEST(SharedScenes, Dm4ishObjAndGlbMaterialsAgree) {
 
 }  // namespace
 }  // namespace tetraprobe
+
+namespace tetraprobe {
+namespace {
+
+// The measurement scene descriptions in samples/shared follow docs/scene_format.md: they load, warning-free
+// apart from dropped zero-area triangles, whenever the shared scenes are present.
+TEST(SharedScenes, SceneDescriptionsLoadWithoutUnexpectedWarnings) {
+  if (!std::filesystem::exists(kShared / "README.md")) GTEST_SKIP() << "shared scenes not present";
+  const auto dir = kSource / "samples/shared";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not present";
+  size_t loaded = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < 11 || name.compare(name.size() - 11, 11, ".scene.json") != 0) continue;
+    const Scene s = loadScene(entry.path().string());
+    ++loaded;
+    EXPECT_FALSE(s.cameras.empty()) << name;
+    for (const auto& w : s.warnings) EXPECT_NE(w.find("zero-area"), std::string::npos) << name << ": " << w;
+  }
+  EXPECT_GT(loaded, 0u);
+}
+
+}  // namespace
+}  // namespace tetraprobe
