@@ -9,8 +9,10 @@
 namespace tetraprobe {
 
 // A regular grid at `spacing` metres covering [lo, hi] (inclusive, centred so the margins are equal), in
-// x-fastest order. Throws InputError for a non-positive or non-finite spacing, or when the grid would exceed
-// `maxProbes` points.
+// x-fastest order: floor(extent / spacing) + 1 points per axis (an extent that is an exact multiple of the
+// spacing, to 1e-9 relative, puts points on both faces), all inside the box. Throws InputError for a
+// non-positive or non-finite spacing, non-finite corners, hi < lo on an axis, or when the grid would exceed
+// `maxProbes` points (checked before allocating).
 std::vector<glm::dvec3> placeGridProbes(const glm::dvec3& lo, const glm::dvec3& hi, double spacing,
                                         size_t maxProbes = 5'000'000);
 
