@@ -78,8 +78,11 @@ glm::dvec3 sanitize(glm::dvec3 x, const StartGrid& g) {
   }
   const double maxRadius = 1e6 * (glm::length(hi - lo) + 1.0);
   const glm::dvec3 d = x - centre;
-  const double r2 = glm::dot(d, d);
-  if (r2 > maxRadius * maxRadius) x = centre + d * (maxRadius / std::sqrt(r2));
+  const double far = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+  if (far > maxRadius) {
+    const glm::dvec3 dir = d / far;  // scaled first: |d|^2 could overflow
+    x = centre + dir * (maxRadius / glm::length(dir));
+  }
   return x;
 }
 
