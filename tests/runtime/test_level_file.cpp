@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include "test_levels.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
 namespace {
@@ -168,6 +170,49 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
     EXPECT_NE(r.message.find(c.needle), std::string::npos) << r.message;
     EXPECT_TRUE(emptyLevel(out));
   }
+}
+
+// Fuzzing past the checksums: whatever the validator lets through must be safe to query (no crash, no NaN,
+// no out-of-range tet), and whatever it rejects must be reported as corrupt.
+TEST(LevelFile, MutationsBehindValidChecksumsAreRejectedOrSafe) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  std::mt19937_64 rng(77);
+  std::uniform_int_distribution<size_t> at(80, full.size() - 5);
+  std::uniform_int_distribution<int> byte(0, 255), flips(1, 8);
+  std::uniform_real_distribution<double> coord(-1e4, 1e4);
+  int accepted = 0;
+  for (int iter = 0; iter < 3000; ++iter) {
+    std::vector<char> b = full;
+    for (int k = flips(rng); k > 0; --k) b[at(rng)] = char(byte(rng));
+    fixPayloadCrc(b);
+    writeBytes(dir.file("fuzz.tpb"), b, b.size());
+    Level level;
+    const LevelResult r = loadLevel(dir.file("fuzz.tpb"), level);
+    if (!r) {
+      ASSERT_EQ(r.status, LevelStatus::kCorrupt) << "iteration " << iter << ": " << r.message;
+      continue;
+    }
+    ++accepted;
+    ASSERT_TRUE(validateLevel(level));
+    const ProbeQuery q(level);
+    for (int k = 0; k < 20; ++k) {
+      const glm::dvec3 x =
+          level.origin + glm::dvec3(coord(rng), coord(rng), coord(rng)) * (k < 10 ? 1e-3 : 1.0);
+      const Location loc = q.locate(x);
+      ASSERT_GE(loc.tet, 0);
+      ASSERT_LT(size_t(loc.tet), level.tets.size());
+      float sum = 0.0f;
+      for (int i = 0; i < 4; ++i) {
+        ASSERT_TRUE(std::isfinite(loc.weights[i]) && loc.weights[i] >= 0.0f) << "iteration " << iter;
+        sum += loc.weights[i];
+      }
+      ASSERT_NEAR(sum, 1.0f, 1e-5f) << "iteration " << iter;
+    }
+  }
+  EXPECT_GT(accepted,
+            100);  // float fields (positions, SH, rows) take most mutations: both paths are exercised
 }
 
 // A header claiming 1e12 tets must fail on the size check, before any allocation.
