@@ -45,11 +45,15 @@ struct Image {
 };
 
 // Wall-clock and GPU times of one renderLevel call, milliseconds. GPU times come from timestamp queries (0
-// when the queue has none) and include lavapipe's lazy shader JIT, which runs at the first draw/dispatch.
+// when the queue has none). lavapipe JIT-compiles shaders at the first draw/dispatch and runs dispatches
+// asynchronously (timestamps are taken after barriers): gbufferMs includes that compile; the lighting pass is
+// preceded by a one-workgroup warm-up dispatch so lightingMs does not (the compile lands in
+// lightingWarmupMs).
 struct RenderTimings {
-  double totalMs = 0;     // whole call: device, upload, pipelines, render, readback, object cleanup
-  double gbufferMs = 0;   // GPU: G-buffer render pass
-  double lightingMs = 0;  // GPU: lighting compute pass
+  double totalMs = 0;           // whole call: device, upload, pipelines, render, readback, object cleanup
+  double gbufferMs = 0;         // GPU: G-buffer render pass
+  double lightingWarmupMs = 0;  // GPU: the one-workgroup warm-up dispatch of the lighting pipeline
+  double lightingMs = 0;        // GPU: the full-screen lighting compute pass
 };
 
 struct RenderResult {
