@@ -22,15 +22,19 @@ constexpr int kSideRays = 32;
 constexpr double kSideBackFaceFraction = 0.25;
 constexpr int kMaxDrawsPerPoint = 20;
 
-// True when at most 25 % of kSideRays hemisphere rays from `origin` about `n` meet back faces.
-bool sideIsOpen(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n, Rng& rng) {
+// True when at most 25 % of kSideRays hemisphere rays from `origin` about `n` meet back faces. Under a black
+// sky an escaping ray counts as closed too: the level is then an interior and a side that sees the void is
+// its outside (the exterior face of a single-sided wall, a slab face coplanar with the ceiling), where no
+// viewer stands and the reference is zero.
+bool sideIsOpen(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n, bool blackSky,
+                Rng& rng) {
   int back = 0;
   for (int k = 0; k < kSideRays; ++k) {
     // Stratified in the first coordinate (cos theta) so 32 rays cover the hemisphere evenly.
     const float u1 = (float(k) + rng.uniform()) / float(kSideRays), u2 = rng.uniform();
     const glm::vec3 d = uniformHemisphere(n, u1, u2);
     const Hit hit = tracer.intersect(origin, d, 0.0f, std::numeric_limits<float>::infinity());
-    if (hit.hit && !hit.frontFace) ++back;
+    if ((hit.hit && !hit.frontFace) || (!hit.hit && blackSky)) ++back;
   }
   return double(back) <= kSideBackFaceFraction * kSideRays;
 }
@@ -44,6 +48,9 @@ std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int cou
   DenormalScope denormals;
   points.reserve(size_t(count));
   const float eps = impl.rayEpsilon;
+  const Scene& scene = tracer.scene();
+  const bool blackSky = scene.skyRadiance == glm::vec3(0.0f) &&
+                        (!scene.hasSkyGradient() || scene.skyHorizonRadiance == glm::vec3(0.0f));
   const int64_t maxDraws = int64_t(kMaxDrawsPerPoint) * count;
   for (int64_t draw = 0; draw < maxDraws && int(points.size()) < count; ++draw) {
     Rng rng(streamKey(seed, uint64_t(draw)));
@@ -57,9 +64,9 @@ std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int cou
     const glm::vec3 p = impl.pointOn(uint32_t(tri), b.x, b.y);
     const glm::vec3 front = impl.normals[tri];
     glm::vec3 n(0.0f);
-    if (sideIsOpen(tracer, p + front * eps, front, rng))
+    if (sideIsOpen(tracer, p + front * eps, front, blackSky, rng))
       n = front;
-    else if (sideIsOpen(tracer, p - front * eps, -front, rng))
+    else if (sideIsOpen(tracer, p - front * eps, -front, blackSky, rng))
       n = -front;
     else
       continue;

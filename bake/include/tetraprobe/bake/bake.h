@@ -79,7 +79,8 @@ struct SurfacePoint {
 // `count` random points on the scene's surfaces, area-weighted, each on a side that faces open space
 // (points whose both sides are enclosed are skipped and redrawn). Deterministic for a given seed.
 // A side is open when at most 25 % of 32 uniform-hemisphere rays from the point (offset by
-// tracer.rayEpsilon() along that side's normal) hit back faces; the front side wins when both are open.
+// tracer.rayEpsilon() along that side's normal) hit back faces -- or, when the sky is black, hit back faces
+// or escape (the level is an interior and the void is its outside); the front side wins when both are open.
 // At most 20 x count draws: may return fewer than `count` points when most surface is enclosed.
 std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int count, uint64_t seed);
 
