@@ -6,16 +6,18 @@
 //   origin, in double, before the value reaches float). Normals are unit vectors in the same (world) axes.
 // - tetraprobeIrradiance(localPos, normal) returns irradiance E in W/m^2 (RGB). Lambertian outgoing radiance
 //   is albedo * E / pi. E can be slightly negative where the L2 projection rings; clamp if you need to.
-// - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: it walks from `hint` (a tet index, e.g. last
-//   frame's tet of the object) or, when hint < 0, from the start-grid cell holding localPos (clamped to the
-//   grid). Each step computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the
-//   point is inside (within that tolerance of a face, the neighbour is taken if it holds the point better);
-//   otherwise the walk moves to the neighbour opposite the most negative weight (the first one on ties).
-//   Leaving through a hull face (neighbour -1) ends the walk outside the hull: weights clamped to >= 0 and
-//   renormalized. After tetraprobeMaxWalkSteps steps or a cycle it scans every tet (the CPU's fallback; define
-//   TETRAPROBE_NO_SCAN_FALLBACK to clamp in the current tet instead). An empty level gives tet -1 and E = 0.
+// - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: a walk from `hint` (a tet index, e.g. last
+//   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps), else from the start-grid cell holding
+//   localPos (clamped to the grid; at most tetraprobeMaxWalkSteps), else a scan of every tet. Each step
+//   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
+//   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
+//   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
+//   face (neighbour -1) ends it outside the hull: weights clamped to >= 0 and renormalized. A cycle answers
+//   with the visited tet holding the point best, if within TETRAPROBE_CYCLE_ACCEPT_EPS. Define
+//   TETRAPROBE_NO_SCAN_FALLBACK to skip the O(tets) scan (the answer is then the walk's best tet, clamped).
+//   An empty level gives tet -1 and E = 0.
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
-//   rounding); outside, a near-tie can send the two walks out through different hull faces.
+//   rounding); outside, a tie float cannot resolve can send the two walks out through different hull faces.
 // - Bindings: the three read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
 //   TETRAPROBE_BINDING + 0, 1, 2 (defaults 0 and 0,1,2; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
@@ -28,8 +30,15 @@
 #include "tetraprobe_layout.glsl"
 #include "tetraprobe_sh.glsl"
 
+// The CPU query's constants (runtime/src/query.cpp: kInsideEps, kCycleAcceptEps, kMaxHintSteps).
 #ifndef TETRAPROBE_INSIDE_EPS
 #define TETRAPROBE_INSIDE_EPS 1e-6
+#endif
+#ifndef TETRAPROBE_CYCLE_ACCEPT_EPS
+#define TETRAPROBE_CYCLE_ACCEPT_EPS 1e-4
+#endif
+#ifndef TETRAPROBE_MAX_HINT_STEPS
+#define TETRAPROBE_MAX_HINT_STEPS 256
 #endif
 
 struct TetraprobeLocation {
@@ -91,8 +100,11 @@ vec3 tetraprobeSanitize(vec3 x) {
   }
   float maxRadius = 1e6 * (length(hi - lo) + 1.0);
   vec3 d = x - centre;
-  float r2 = dot(d, d);
-  if (r2 > maxRadius * maxRadius) x = centre + d * (maxRadius / sqrt(r2));
+  float far = max(max(abs(d.x), abs(d.y)), abs(d.z));
+  if (far > maxRadius) {
+    vec3 dir = d / far;  // scaled first: |d|^2 could overflow
+    x = centre + dir * (maxRadius / length(dir));
+  }
   return x;
 }
 
@@ -121,13 +133,18 @@ TetraprobeLocation tetraprobeScanAll(vec3 x) {
   return tetraprobeFinish(best, bestW, bestMin >= -TETRAPROBE_INSIDE_EPS);
 }
 
-TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
-  if (tetraprobeTetCount <= 0) return TetraprobeLocation(-1, vec4(0.0), false);
-  vec3 x = tetraprobeSanitize(localPos);
-  int cur = (hint >= 0 && hint < tetraprobeTetCount) ? hint : tetraprobeStartCellTet(x);
+// One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
+// leave sliver faces' planes slightly apart) without any visited tet holding x within
+// TETRAPROBE_CYCLE_ACCEPT_EPS; a cycle otherwise answers with the visited tet holding x best. On false, `loc`
+// is that best visited tet, clamped (used only with TETRAPROBE_NO_SCAN_FALLBACK).
+bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc) {
   int saved = cur;  // Brent's cycle detection: a checkpoint moved at powers of two
   int power = 1, lam = 0;
-  for (int step = 0; step < tetraprobeMaxWalkSteps; ++step) {
+  int best = -1;
+  float bestMin = 0.0;
+  vec4 bestW = vec4(0.0);
+  loc = TetraprobeLocation(-1, vec4(0.0), false);
+  for (int step = 0; step < maxSteps; ++step) {
     vec4 w = tetraprobeWeights(cur, x);
     int m = tetraprobeMinIndex(w);
     int next = tetraprobeTets[cur].n[m];
@@ -135,21 +152,47 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
       // Inside within tolerance; a point that close to a face may be more inside the neighbour.
       if (w[m] < 0.0 && next >= 0) {
         vec4 wn = tetraprobeWeights(next, x);
-        if (wn[tetraprobeMinIndex(wn)] > w[m]) return tetraprobeFinish(next, wn, true);
+        if (wn[tetraprobeMinIndex(wn)] > w[m]) {
+          loc = tetraprobeFinish(next, wn, true);
+          return true;
+        }
       }
-      return tetraprobeFinish(cur, w, true);
+      loc = tetraprobeFinish(cur, w, true);
+      return true;
     }
-    if (next < 0) return tetraprobeFinish(cur, w, false);  // left through a hull face: outside the hull
+    if (next < 0) {  // left through a hull face: outside the hull
+      loc = tetraprobeFinish(cur, w, false);
+      return true;
+    }
+    if (best < 0 || w[m] > bestMin) {
+      best = cur;
+      bestMin = w[m];
+      bestW = w;
+    }
     cur = next;
-    if (cur == saved) break;  // cycle (floating-point walks can loop)
+    if (cur == saved) {  // a cycle: `best` is the best tet on it
+      loc = tetraprobeFinish(best, bestW, bestMin >= -TETRAPROBE_INSIDE_EPS);
+      return bestMin >= -TETRAPROBE_CYCLE_ACCEPT_EPS;
+    }
     if (++lam == power) {
       saved = cur;
       power *= 2;
       lam = 0;
     }
   }
+  loc = tetraprobeFinish(best, bestW, false);
+  return false;
+}
+
+TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
+  if (tetraprobeTetCount <= 0) return TetraprobeLocation(-1, vec4(0.0), false);
+  vec3 x = tetraprobeSanitize(localPos);
+  TetraprobeLocation loc;
+  // A hint gets a short budget, then the start grid the full one, then the scan.
+  if (hint >= 0 && hint < tetraprobeTetCount && tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc)) return loc;
+  if (tetraprobeWalk(x, tetraprobeStartCellTet(x), tetraprobeMaxWalkSteps, loc)) return loc;
 #ifdef TETRAPROBE_NO_SCAN_FALLBACK
-  return tetraprobeFinish(cur, tetraprobeWeights(cur, x), false);
+  return loc;
 #else
   return tetraprobeScanAll(x);
 #endif
