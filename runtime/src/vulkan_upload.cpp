@@ -75,6 +75,30 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     return VK_ERROR_INITIALIZATION_FAILED;
   }
 
+  // The shader indexes with these without bounds checks: an index out of range would read outside a buffer.
+  const auto tetCount = int64_t(level.tets.size()), probeCount = int64_t(level.probes.size());
+  if (level.sh.size() != level.probes.size()) {
+    if (error)
+      *error = "level has " + std::to_string(level.sh.size()) + " SH for " + std::to_string(probeCount) +
+               " probes";
+    return VK_ERROR_INITIALIZATION_FAILED;
+  }
+  for (int64_t t = 0; t < tetCount; ++t) {
+    const Tet& tet = level.tets[size_t(t)];
+    for (int i = 0; i < 4; ++i) {
+      if (tet.v[i] < 0 || tet.v[i] >= probeCount || tet.n[i] < -1 || tet.n[i] >= tetCount) {
+        if (error) *error = "tet " + std::to_string(t) + " has a probe or neighbour index out of range";
+        return VK_ERROR_INITIALIZATION_FAILED;
+      }
+    }
+  }
+  for (int32_t s : grid.startTet) {
+    if (s < 0 || s >= tetCount) {
+      if (error) *error = "start grid names tet " + std::to_string(s) + " of " + std::to_string(tetCount);
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
+  }
+
   std::vector<char> data[kGpuBindingCount];
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
   appendBytes(data[kGpuBindingSh], level.sh.data(), level.sh.size());

@@ -315,5 +315,21 @@ TEST(GpuLookup, EmptyLevelGivesZero) {
   EXPECT_GT(geometry, 0);
 }
 
+// A level whose tets point outside its arrays is refused at upload (the shader reads without bounds checks),
+// with a message naming the tet, instead of rendering garbage or faulting.
+TEST(Render, RejectsLevelWithIndexOutOfRange) {
+  Level level = makeLevel();
+  const ProbeQuery query(level);  // built on the valid level; the corruption below is what the upload sees
+  level.tets[3].n[1] = int32_t(level.tets.size()) + 7;
+  try {
+    renderLevel(makeMesh(), level, query, makeView(RenderMode::kIrradiance));
+    FAIL() << "expected the upload to refuse the level";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    if (what.find("no Vulkan") != std::string::npos) GTEST_SKIP() << what;
+    EXPECT_NE(what.find("tet 3"), std::string::npos) << what;
+  }
+}
+
 }  // namespace
 }  // namespace tetraprobe

@@ -30,9 +30,11 @@ struct VulkanLevelBuffers {
 
 // Creates and fills the buffers of `level` (tets, SH) and `grid` (ProbeQuery::startGrid() of a query built
 // on the same level). Positions stay in the level's local frame. An empty level (no tets) gives valid buffers
-// with tetCount 0, for which the shader returns E = 0. Fails with VK_ERROR_OUT_OF_DEVICE_MEMORY when a buffer
-// exceeds the device's maxStorageBufferRange (lavapipe: 128 MiB, about 1.6 M tets) or memory runs out; on
-// failure nothing is left allocated and `out` is reset.
+// with tetCount 0, for which the shader returns E = 0. Every index the shader follows (tet probes and
+// neighbours, start tets, one SH per probe) is checked first, O(tets + cells), since the shader reads without
+// bounds checks: any out of range fails with VK_ERROR_INITIALIZATION_FAILED. A buffer over the device's
+// maxStorageBufferRange (lavapipe: 128 MiB, about 1.6 M tets) or exhausted memory fails with
+// VK_ERROR_OUT_OF_DEVICE_MEMORY. On failure nothing is left allocated and `out` is reset.
 VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
                             const StartGrid& grid, VulkanLevelBuffers& out, std::string* error = nullptr,
                             int32_t maxWalkSteps = kGpuDefaultMaxWalkSteps);
