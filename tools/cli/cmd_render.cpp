@@ -118,8 +118,9 @@ int cmdRender(int argc, char** argv) {
         args.str("--exposure") == "auto" ? autoExposure(result.color) : float(args.number("--exposure"));
     if (!writePng(out, result.color, exposure, &error)) throw std::runtime_error(error);
   }
-  std::printf("tetraprobe render: %s (%dx%d, %s) in %.2fs\n", out.c_str(), view.width, view.height,
-              mode.c_str(), seconds);
+  std::printf("tetraprobe render: %s (%dx%d, %s) in %.2fs; GPU: G-buffer %.1f ms, per-pixel lookup %.1f ms\n",
+              out.c_str(), view.width, view.height, mode.c_str(), seconds, result.timings.gbufferMs,
+              result.timings.lightingMs);
   return 0;
 }
 

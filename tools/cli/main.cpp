@@ -21,7 +21,7 @@ constexpr Command kCommands[] = {
     {"bake", tetraprobe::cli::cmdBake, "place probes, path-trace their SH, tetrahedralize, write LEVEL.tpb"},
     {"inspect", tetraprobe::cli::cmdInspect, "print what a level file holds"},
     {"query", tetraprobe::cli::cmdQuery, "irradiance at points, from the level file (CPU runtime)"},
-    // {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},
+    {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},
     {"eval", tetraprobe::cli::cmdEval, "measure lookup error against path-traced ground truth"},
 };
 
