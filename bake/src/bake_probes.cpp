@@ -5,6 +5,7 @@
 // References: Ramamoorthi & Hanrahan 2001 ("An efficient representation for irradiance environment maps");
 // Sloan 2008 ("Stupid spherical harmonics tricks") for the projection of deltas.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -14,6 +15,8 @@
 #include <glm/geometric.hpp>
 
 #include "path_tracer.h"
+#include "probe_bake.h"
+#include "ray_tap.h"
 #include "rng.h"
 #include "sampling.h"
 #include "tetraprobe/bake/bake.h"
@@ -61,7 +64,10 @@ void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh)
   }
 }
 
-ShRgb bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options) {
+}  // namespace
+
+ShRgb bake_detail::bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
+                             const BakeOptions& options) {
   DenormalScope denormals;
   const TraceSettings settings{options.bounces, options.content};
   const int n = options.samplesPerProbe;
@@ -83,7 +89,21 @@ ShRgb bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
   return sh;
 }
 
-}  // namespace
+void bake_detail::validateBakeOptions(const BakeOptions& options) {
+  if (options.samplesPerProbe < 1)
+    throw InputError("bake: samplesPerProbe must be >= 1 (got " + std::to_string(options.samplesPerProbe) +
+                     ")");
+  if (options.bounces < 0)
+    throw InputError("bake: bounces must be >= 0 (got " + std::to_string(options.bounces) + ")");
+  if (options.shOrder != 1 && options.shOrder != 2)
+    throw InputError("bake: SH order must be 1 or 2 (got " + std::to_string(options.shOrder) + ")");
+}
+
+void truncateShOrder(std::vector<ShRgb>& sh, int order) {
+  if (order != 1) return;
+  for (ShRgb& p : sh)
+    for (int i = 4; i < kShCoeffCount; ++i) p.c[size_t(i)] = glm::vec3(0.0f);
+}
 
 std::vector<glm::vec3> bakeSphereDirections(int count, uint64_t key) {
   std::vector<glm::vec3> dirs(size_t(std::max(count, 0)));
@@ -115,23 +135,35 @@ void addDeltaToSh(ShRgb& sh, const glm::vec3& dir, const glm::vec3& irradiance) 
 }
 
 std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
-                              const BakeOptions& options) {
-  if (options.samplesPerProbe < 1)
-    throw InputError("bake: samplesPerProbe must be >= 1 (got " + std::to_string(options.samplesPerProbe) +
-                     ")");
-  if (options.bounces < 0)
-    throw InputError("bake: bounces must be >= 0 (got " + std::to_string(options.bounces) + ")");
+                              const BakeOptions& options, BakeStats* stats) {
+  validateBakeOptions(options);
   for (size_t i = 0; i < probes.size(); ++i)
     if (!std::isfinite(probes[i].x) || !std::isfinite(probes[i].y) || !std::isfinite(probes[i].z))
       throw InputError("bake: probe " + std::to_string(i) + " has a non-finite position");
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<ShRgb> out(probes.size());
+  std::vector<RayTap> taps(stats ? probes.size() : 0);  // per probe: sums independent of the threads
   std::unique_ptr<Progress> progress;
   if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
   parallelFor(probes.size(), options.threads, [&](size_t i) {
-    out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+    if (stats) {
+      RayTapScope scope(taps[i]);
+      out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+    } else {
+      out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+    }
     if (progress) progress->advance();
   });
   if (progress) progress->finish();
+  truncateShOrder(out, options.shOrder);
+  if (stats) {
+    *stats = BakeStats{};
+    for (const RayTap& t : taps) {
+      stats->intersectRays += t.intersects;
+      stats->occludedRays += t.occludeds;
+    }
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
   return out;
 }
 

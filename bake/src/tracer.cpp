@@ -12,6 +12,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "ray_tap.h"
 #include "sampling.h"
 #include "tetraprobe/common/error.h"
 #include "tracer_impl.h"
@@ -180,6 +181,11 @@ Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float 
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->rtcScene, &context, &rh);
+  if (bake_detail::RayTap* tap = bake_detail::currentRayTap()) {
+    ++tap->intersects;
+    if (tap->record)
+      tap->record->push_back({origin, tnear, dir, tfar, 0u, rh.hit.geomID != RTC_INVALID_GEOMETRY_ID});
+  }
   Hit hit;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.hit = true;
@@ -213,7 +219,12 @@ bool SceneTracer::occluded(const glm::vec3& origin, const glm::vec3& dir, float 
   ray.id = 0;
   ray.flags = 0;
   rtcOccluded1(impl_->rtcScene, &context, &ray);
-  return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+  const bool blocked = ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+  if (bake_detail::RayTap* tap = bake_detail::currentRayTap()) {
+    ++tap->occludeds;
+    if (tap->record) tap->record->push_back({origin, tnear, dir, tfar, 1u, blocked});
+  }
+  return blocked;
 }
 
 #ifdef TETRAPROBE_BAKE_HAS_MXCSR

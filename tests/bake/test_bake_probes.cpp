@@ -8,6 +8,8 @@
 
 #include "test_scenes.h"
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/bake/bench_rays.h"
+#include "tetraprobe/common/error.h"
 
 namespace tetraprobe {
 namespace {
@@ -202,6 +204,71 @@ TEST(DirectPunctual, ProbeHoldsExactDeltaProjection) {
   SceneTracer roofTracer(roofed);
   const auto shadowed = bakeProbes(roofTracer, {probe}, quiet(2, 16, kContentDirectPunctual));
   for (int i = 0; i < kShCoeffCount; ++i) EXPECT_EQ(shadowed[0].c[i], glm::vec3(0.0f));
+}
+
+// --sh-order 1: coefficients 4..8 are exactly zero and 0..3 are the L2 bake's, bit for bit (the same random
+// streams; the truncation happens after projection).
+TEST(ShOrder, L1BakeIsTheL2BakeWithoutBandTwo) {
+  const Scene s = openRoom();
+  SceneTracer tracer(s);
+  BakeOptions o = quiet(2, 64, kContentAll);
+  const std::vector<ShRgb> l2 = bakeProbes(tracer, roomProbes(), o);
+  o.shOrder = 1;
+  const std::vector<ShRgb> l1 = bakeProbes(tracer, roomProbes(), o);
+  ASSERT_EQ(l1.size(), l2.size());
+  bool anyBandTwo = false;
+  for (size_t p = 0; p < l1.size(); ++p) {
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(l1[p].c[i], l2[p].c[i]) << "probe " << p << " coefficient " << i;
+    for (int i = 4; i < kShCoeffCount; ++i) {
+      EXPECT_EQ(l1[p].c[i], glm::vec3(0.0f)) << "probe " << p << " coefficient " << i;
+      anyBandTwo = anyBandTwo || l2[p].c[i] != glm::vec3(0.0f);
+    }
+  }
+  EXPECT_TRUE(anyBandTwo);
+  o.shOrder = 3;
+  EXPECT_THROW(bakeProbes(tracer, roomProbes(), o), InputError);
+}
+
+// Ray counts are summed per probe: the same for any thread count, and the stats do not change the SH.
+// Every path starts with one closest-hit ray, so there are at least samples x probes of them.
+TEST(BakeStats, RayCountsAreDeterministic) {
+  const Scene s = openRoom();
+  SceneTracer tracer(s);
+  BakeOptions o = quiet(3, 64, kContentDefault);
+  BakeStats one, two;
+  o.threads = 1;
+  const std::vector<ShRgb> a = bakeProbes(tracer, roomProbes(), o, &one);
+  o.threads = 2;
+  const std::vector<ShRgb> b = bakeProbes(tracer, roomProbes(), o, &two);
+  const std::vector<ShRgb> c = bakeProbes(tracer, roomProbes(), o);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(ShRgb)), 0);
+  EXPECT_EQ(std::memcmp(a.data(), c.data(), a.size() * sizeof(ShRgb)), 0);
+  EXPECT_EQ(one.intersectRays, two.intersectRays);
+  EXPECT_EQ(one.occludedRays, two.occludedRays);
+  EXPECT_GE(one.intersectRays, uint64_t(64 * roomProbes().size()));
+  EXPECT_GT(one.occludedRays, 0u);
+  EXPECT_GT(one.seconds, 0.0);
+}
+
+// The recorder sees exactly the rays the bake counts, and bare Embree gives the same answers on replay.
+TEST(BenchRays, RecordedRaysMatchTheCountAndReplayAgrees) {
+  const Scene s = openRoom();
+  SceneTracer tracer(s);
+  BakeOptions o = quiet(3, 64, kContentAll);
+  BakeStats stats;
+  const std::vector<glm::dvec3> probes = roomProbes();
+  bakeProbes(tracer, probes, o, &stats);
+  std::vector<size_t> indices(probes.size());
+  for (size_t i = 0; i < indices.size(); ++i) indices[i] = i;
+  const std::vector<RecordedRay> rays = recordBakeRays(tracer, probes, indices, o);
+  ASSERT_EQ(rays.size(), stats.rays());
+  uint64_t occluded = 0;
+  for (const RecordedRay& r : rays) occluded += r.occluded;
+  EXPECT_EQ(occluded, stats.occludedRays);
+  const ReplayResult replay = replayRays(tracer, rays, 2, 0.0);
+  EXPECT_EQ(replay.rays, rays.size());
+  EXPECT_EQ(replay.mismatches, 0u);
+  EXPECT_THROW(recordBakeRays(tracer, probes, {0}, o), InputError);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "test_scenes.h"
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/common/error.h"
 
 namespace tetraprobe {
 namespace {
@@ -236,6 +237,44 @@ TEST(Reference, AgreesWithProbeIrradianceUnderSky) {
   const ReferenceIrradiance r = referenceIrradiance(tracer, {0, 0, 0}, {0, 1, 0}, 1024, 9, o);
   for (int ch = 0; ch < 3; ++ch)
     EXPECT_NEAR(e[ch], r.irradiance[ch], 0.03 * r.irradiance[ch] + 4 * r.stderror[ch]);
+}
+
+// The adaptive oracle stops as soon as the luminance's relative standard error is at most the target (on a
+// batch boundary), is the fixed-count oracle at the sample count it stopped at (same streams), and respects
+// maxSamples. A point in the dark stops at minSamples.
+TEST(Reference, ToErrorStopsAtTheTargetAndEqualsFixedCount) {
+  Scene s;
+  const uint32_t m = test::addMaterial(s, glm::vec3(0.5f));
+  test::addGround(s, 0.0f, 200.0f, m);
+  test::addQuad(s, {-1, 2, -1}, {1, 2, -1}, {1, 2, 1}, {-1, 2, 1}, m);  // a roof: some variance
+  s.skyRadiance = {1.0f, 0.8f, 0.6f};
+  SceneTracer tracer(s);
+  const BakeOptions o = opts(2, kContentDefault);
+  const glm::dvec3 p(0.9, 0.0, 0.3);
+  const glm::vec3 n(0, 1, 0);
+  const auto lum = [](const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; };
+  for (double target : {0.05, 0.01}) {
+    const ReferenceIrradiance r = referenceIrradianceToError(tracer, p, n, target, 1 << 20, 17, o);
+    EXPECT_GE(r.samples, 64);
+    EXPECT_EQ((r.samples - 64) % 32, 0);
+    const ReferenceIrradiance fixed = referenceIrradiance(tracer, p, n, r.samples, 17, o);
+    EXPECT_EQ(r.irradiance, fixed.irradiance);
+    EXPECT_EQ(r.stderror, fixed.stderror);
+    // (the luminance stderr is not the luminance of the channel stderrors; check the stop loosely)
+    EXPECT_LT(lum(r.stderror), 1.5 * target * lum(r.irradiance)) << target;
+    if (r.samples > 64) {
+      const ReferenceIrradiance before = referenceIrradiance(tracer, p, n, r.samples - 32, 17, o);
+      EXPECT_GT(lum(before.stderror), 0.5 * target * lum(before.irradiance)) << "stopped late";
+    }
+  }
+  const ReferenceIrradiance capped = referenceIrradianceToError(tracer, p, n, 1e-6, 100, 17, o);
+  EXPECT_EQ(capped.samples, 100);
+  Scene dark;
+  test::addGround(dark, 0.0f, 10.0f, test::addMaterial(dark, glm::vec3(0.5f)));
+  SceneTracer darkTracer(dark);
+  EXPECT_EQ(referenceIrradianceToError(darkTracer, p, n, 0.01, 1000, 1, o).samples, 64);
+  EXPECT_THROW(referenceIrradianceToError(tracer, p, n, -1.0, 100, 1, o), InputError);
+  EXPECT_THROW(referenceIrradianceToError(tracer, p, n, 0.01, 0, 1, o), InputError);
 }
 
 }  // namespace

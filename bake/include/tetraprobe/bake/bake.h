@@ -2,6 +2,8 @@
 // reference oracle used by the evaluation. Build side.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -20,6 +22,16 @@ struct BakeOptions {
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
   bool progress = true;                 // progress bar on a terminal
+  int shOrder = 2;                      // 2: L2 (9 coefficients); 1: L1, coefficients 4..8 set to exactly 0
+};
+
+// What a bake cost. Ray counts are summed per probe, so they are identical for any thread count.
+struct BakeStats {
+  uint64_t intersectRays = 0;  // closest-hit queries (camera-less paths: one per path vertex)
+  uint64_t occludedRays = 0;   // shadow (any-hit) queries: NEE of emissive triangles and punctual lights
+  double seconds = 0.0;        // wall time of bakeProbes
+  uint64_t rays() const { return intersectRays + occludedRays; }
+  double raysPerSecond() const { return seconds > 0.0 ? double(rays()) / seconds : 0.0; }
 };
 
 // Bakes one SH per probe (world-space positions). Deterministic for any `threads`.
@@ -28,9 +40,15 @@ struct BakeOptions {
 // With kContentDirectPunctual, each unshadowed point/spot light adds (I spot / r^2) Y(d) and each unshadowed
 // sun E Y(d) (d towards the light, or the sun disc's centre) analytically: the delta's exact projection.
 // Probes inside geometry are baked like any other (filter them with probesInsideGeometry).
-// Throws InputError for samplesPerProbe < 1, bounces < 0 or a non-finite probe position.
+// options.shOrder 1 zeroes coefficients 4..8 after projection (0..3 are those of the L2 bake, bit for bit).
+// `stats`, when given, receives the ray counts and the wall time.
+// Throws InputError for samplesPerProbe < 1, bounces < 0, shOrder not 1 or 2, or a non-finite probe
+// position.
 std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
-                              const BakeOptions& options);
+                              const BakeOptions& options, BakeStats* stats = nullptr);
+
+// Sets coefficients 4..8 to exactly zero (an L1 probe, runtime/sh.h) when order == 1; no-op for order 2.
+void truncateShOrder(std::vector<ShRgb>& sh, int order);
 
 // The bake's direction set over the unit sphere: an n-point spherical Fibonacci set under a uniformly random
 // rotation derived from `key` (the probe bake uses key = hash(seed, probe index)). Each direction is
@@ -69,6 +87,17 @@ ReferenceIrradiance referenceIrradiance(const SceneTracer& tracer, const glm::dv
                                         const glm::vec3& normal, int samples, uint64_t seed,
                                         const BakeOptions& options);
 
+// referenceIrradiance run until the luminance estimate is precise enough: samples are drawn in batches of
+// 32 (sample s uses the same random stream as in referenceIrradiance, so a run that stops at N samples
+// equals referenceIrradiance(..., N, ...)) until, after at least `minSamples`, the standard error of the
+// luminance (Rec. 709 weights) is at most relError x |mean luminance|, or `maxSamples` are reached.
+// A point that receives no light stops at minSamples (zero mean, zero error). Throws InputError as
+// referenceIrradiance, and for relError < 0 or maxSamples < 1.
+ReferenceIrradiance referenceIrradianceToError(const SceneTracer& tracer, const glm::dvec3& point,
+                                               const glm::vec3& normal, double relError, int maxSamples,
+                                               uint64_t seed, const BakeOptions& options,
+                                               int minSamples = 64);
+
 struct SurfacePoint {
   glm::dvec3 position{0.0};
   glm::vec3 normal{0.0f};  // unit, pointing into open space (the side a viewer could see)
@@ -83,5 +112,69 @@ struct SurfacePoint {
 // or escape (the level is an interior and the void is its outside); the front side wins when both are open.
 // At most 20 x count draws: may return fewer than `count` points when most surface is enclosed.
 std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int count, uint64_t seed);
+
+// ---- Deringing (bake/src/dering.cpp) ----
+//
+// An SH L2 probe reconstructs irradiance E(n) = sum A_l L_lm Y_lm(n) (runtime/sh.h). Bright, small sources
+// make that ring: E goes negative on the side facing away (-0.04 x the mean near 122 degrees for a single
+// directional light). Deringing multiplies band l by a window factor w_l(s) with strength s in [0, 2]:
+//   w_0 = 1 (the mean, L00, is never changed),  w_l(s) = (1 + cos(pi min(1, s l / 2))) / 2,
+// a Hann window whose half-width shrinks from infinity (s = 0: no change) to 2 bands (s = 1: w_1 = 1/2,
+// w_2 = 0, the cosine-convolved kernel (1 + cos)/4 >= 0, so any non-negative radiance gives non-negative E)
+// and then to 1 band (s = 2: only L00 left).
+
+enum class DeringMode {
+  kNone,   // leave the SH bit-identical
+  kAuto,   // per probe, the smallest strength (on a 1/256 grid) that makes E non-negative
+  kFixed,  // one strength for every probe
+};
+
+struct DeringOptions {
+  DeringMode mode = DeringMode::kAuto;
+  double strength = 0.0;  // kFixed only, in [0, 2]
+  int threads = 0;        // 0 = all cores; never changes the result
+};
+
+struct DeringStats {
+  size_t probes = 0;
+  size_t deringedProbes = 0;         // probes whose SH the window changed (strength > 0)
+  size_t unfixableProbes = 0;        // kAuto: negative even at strength 2 (a negative L00; only imported SH)
+  double maxStrength = 0.0;          // largest strength applied
+  float minIrradianceBefore = 0.0f;  // min over probes, normals and channels of E, W/m^2 (0 with no probes)
+  float minIrradianceAfter = 0.0f;
+};
+
+inline constexpr double kDeringMaxStrength = 2.0;
+inline constexpr int kDeringStepsPerUnit = 256;  // kAuto's strength grid: multiples of 1/256
+// E counts as non-negative when its minimum is >= -kDeringTolerance x the probe's largest mean irradiance
+// (pi Y00 L00 over channels): float rounding of a field whose exact minimum is 0 (a single delta at
+// strength 1) must not push the strength up a step.
+inline constexpr double kDeringTolerance = 1e-5;
+// Normals of the dense check: a spherical Fibonacci set. E is a polynomial of degree 2 on the sphere (its
+// variation has an angular scale of ~90 degrees), and 4096 points are ~3.2 degrees apart, so the best sample
+// lies in the global minimum's basin and within ~0.3 % of the band amplitude of its value; a local search
+// (compass search in the tangent plane, step halved to 1e-7 rad) from that sample then finds the minimum
+// itself.
+inline constexpr int kDeringCheckNormals = 4096;
+
+// The window factors {w_0, w_1, w_2} at strength s (clamped to [0, 2]).
+std::array<double, 3> deringWindow(double strength);
+
+// Multiplies band 1 by w_1(s) and band 2 by w_2(s) in place; L00 is untouched. s = 0 leaves sh bit-identical.
+void applyDeringWindow(ShRgb& sh, double strength);
+
+// Minimum over unit normals and the three channels of E(n) of `sh` windowed at `strength` (sh itself is not
+// changed), W/m^2: dense check plus local refinement (kDeringCheckNormals).
+float minShIrradiance(const ShRgb& sh, double strength = 0.0);
+
+// kAuto's choice for one probe: 0 when E >= -tolerance already; else the smallest multiple s of
+// 1/kDeringStepsPerUnit such that windowed E >= -tolerance, found by bisection so that s - 1/256 is verified
+// to fail; kDeringMaxStrength when even that fails (`fixable` set to false).
+double autoDeringStrength(const ShRgb& sh, bool* fixable = nullptr);
+
+// Derings every probe as options say and returns the statistics. kNone changes nothing (stats still
+// computed). Throws InputError for a kFixed strength outside [0, 2] or non-finite. Deterministic for any
+// thread count.
+DeringStats deringProbes(std::vector<ShRgb>& sh, const DeringOptions& options);
 
 }  // namespace tetraprobe
