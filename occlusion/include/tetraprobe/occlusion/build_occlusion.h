@@ -1,0 +1,74 @@
+// Build side of per-tet probe occlusion (issue #6, light leaking): chooses per tet nothing, up to three
+// splitting planes, or four 16-texel shadow maps, checked against visibility rays. Links Embree through
+// SceneTracer (no Embree type here). Runtime data and evaluation: tetraprobe/runtime/occlusion.h;
+// data layout and selection rule: docs/occlusion.md.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "tetraprobe/bake/tracer.h"
+#include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion.h"
+
+namespace tetraprobe {
+
+enum class OcclusionMode {
+  kAuto,        // per tet, the cheapest representation that agrees with the rays (see buildOcclusion)
+  kNone,        // no occlusion data at all (empty LevelOcclusion)
+  kPlanes,      // every tet with geometry gets planes (the best-agreeing count of 1..3)
+  kShadowMaps,  // every tet with geometry gets shadow maps
+};
+
+// "auto", "none", "planes", "shadow-maps" -> mode; false for anything else.
+bool parseOcclusionMode(const std::string& text, OcclusionMode& mode);
+const char* occlusionModeName(OcclusionMode mode);
+
+struct OcclusionOptions {
+  OcclusionMode mode = OcclusionMode::kAuto;
+  double minAgreement =
+      0.95;                 // auto: a representation is good enough when it answers at least this
+                            // fraction of the tet's sampled (point, probe) visibility questions like the rays
+  int volumeSamples = 32;   // stratified points inside each tet with geometry (no normal, no bias)
+  int surfaceSamples = 32;  // points on the geometry inside each tet, each tested from both sides
+  int threads = 0;          // 0 = all cores; never changes the result
+  bool progress = true;     // progress bar on a terminal
+};
+
+struct OcclusionStats {
+  size_t tets = 0;
+  size_t tetsWithGeometry = 0;                // tets that some triangle cuts (with positive area inside)
+  size_t none = 0;                            // tets storing nothing (includes every tet without geometry)
+  size_t planeTets = 0;                       // tets storing planes
+  size_t planeTetsByCount[4] = {0, 0, 0, 0};  // [1..3]: tets with that many planes
+  size_t shadowMapTets = 0;
+  size_t planes = 0;       // OcclusionPlane records
+  size_t bytes = 0;        // LevelOcclusion::bytes() of the result
+  uint64_t answers = 0;    // sampled (point, probe) visibility answers checked, over tets with geometry
+  uint64_t agreeing = 0;   // of those, answered like the rays by the stored data (visibility > 0.5)
+  uint64_t leaking = 0;    // of those, rays say occluded but the stored data says visible
+  uint64_t rays = 0;       // rays traced
+  double agreement = 1.0;  // agreeing / answers (1 when nothing was checked)
+  double seconds = 0.0;
+};
+
+// Builds the occlusion data of `level` against the geometry of `tracer` (world frame; level positions are
+// local, world = level.origin + local). Deterministic for any options.threads.
+//
+// Per tet: the triangles cutting it are clipped to it (the segment from a point in the tet to one of its
+// probes stays inside the convex tet, so only geometry inside can occlude: a tet without any stores nothing,
+// exactly). Otherwise options.volumeSamples points inside and options.surfaceSamples points on the clipped
+// geometry (each from both sides, normal-biased as at run time) are answered by rays to the four probes, and
+// in auto mode the first candidate that answers at least options.minAgreement of them like the rays wins, in
+// order of cost: none (8 bytes), 1, 2, 3 planes (8 + 16 per plane), shadow maps (8 + 64). When none
+// reaches it, the best-agreeing one wins (ties: the cheaper). Planes come from the clipped triangles
+// clustered by plane (largest clipped area first); each cell's visible-probe mask is the majority answer of
+// the samples in it. Shadow maps trace the 16 sub-triangle centres of each probe's opposite face.
+//
+// The result is empty (nothing stored) when no tet needs data or mode is kNone. Throws InputError for an
+// invalid level (validateLevel), minAgreement outside [0, 1], negative sample counts, or more data than the
+// 28-bit offsets address.
+LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, const OcclusionOptions& options,
+                              OcclusionStats* stats = nullptr);
+
+}  // namespace tetraprobe

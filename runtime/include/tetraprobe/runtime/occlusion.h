@@ -1,0 +1,131 @@
+// Per-tet probe occlusion against light leaking through walls (Killzone Shadow Fall style, Valient 2014):
+// each tet stores nothing, up to three splitting planes, or one 16-texel shadow map per probe. At run time
+// the probes a shading point cannot see drop out of the barycentric interpolation. Permissive: standard
+// library and GLM only. Built by tetraprobe::buildOcclusion (occlusion/build_occlusion.h); layout and
+// selection rule in docs/occlusion.md.
+//
+// Everything is evaluated in the tet's barycentric frame: the weights w (w_i of probe tet.v[i], from the
+// Tet rows of level.h) are all the data a lookup needs besides the records below, so the GPU evaluates it
+// with the weights it already has. Records are flat, fixed-size and pointer-free (std430-ready):
+//   TetOcclusion   8 bytes per tet   (uvec2)
+//   OcclusionPlane 16 bytes per plane (vec4)
+//   shadow maps    64 bytes per tet that has them (4 probes x 16 uint8 texels, read as 16 uints)
+//
+// Bias (surfaces must not shadow themselves): a shading point with normal n is moved along n by
+//   delta = kOcclusionBias / max_i |grad(w_i) . n|   (grad w_i = row[i].xyz, grad w_3 = -sum of the others)
+// i.e. no barycentric coordinate changes by more than kOcclusionBias (3 % of the tet's extent along n).
+// A zero normal (volumes, dynamic objects) means no bias.
+//
+// Soft falloff: planes blend the visibility of the cells on either side over a band of half-width
+// kOcclusionPlaneFalloff (in units of the plane's largest probe distance, see OcclusionPlane); shadow maps
+// fade over a band of half-width kOcclusionShadowFalloff (fraction of the probe-to-face distance) centred
+// on the stored depth. Visibility is a smoothstep of those, continuous in the point.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "tetraprobe/runtime/level.h"
+
+namespace tetraprobe {
+
+inline constexpr float kOcclusionBias = 0.03f;           // barycentric normal offset (see above)
+inline constexpr float kOcclusionPlaneFalloff = 0.02f;   // half-width, plane units
+inline constexpr float kOcclusionShadowFalloff = 0.01f;  // half-width, fraction of probe-to-face distance
+inline constexpr float kOcclusionFallbackSum = 1e-3f;    // applyOcclusion: visible weight below which the
+                                                         // unoccluded weights are blended back in
+
+enum OcclusionKind : uint32_t { kOcclusionNone = 0, kOcclusionPlanes = 1, kOcclusionShadowMaps = 2 };
+
+// Per tet, same order as Level::tets. GLSL: uvec2.
+// - header bits 0-1: OcclusionKind; bits 2-3: plane count (1..3, planes only); bits 4-31: offset, the index
+//   of the tet's first OcclusionPlane (planes) or of its 64-byte block in shadowMaps (shadow maps).
+// - cells (planes only, else 0): the probes visible from each cell of the plane arrangement. Cell c has bit k
+//   set when the point is on the positive side of plane k (value >= 0); its 4-bit mask is
+//   (cells >> 4c) & 15, bit i = probe tet.v[i] visible. Cells 2^count.. are unused (0).
+struct TetOcclusion {
+  uint32_t header = 0;
+  uint32_t cells = 0;
+
+  OcclusionKind kind() const { return OcclusionKind(header & 3u); }
+  uint32_t planeCount() const { return (header >> 2) & 3u; }
+  uint32_t offset() const { return header >> 4; }
+};
+static_assert(sizeof(TetOcclusion) == 8, "TetOcclusion is a std430 uvec2");
+
+inline constexpr uint32_t kOcclusionMaxOffset = (1u << 28) - 1u;
+
+inline TetOcclusion makeTetOcclusion(OcclusionKind kind, uint32_t planeCount, uint32_t offset,
+                                     uint32_t cells) {
+  return TetOcclusion{uint32_t(kind) | (planeCount & 3u) << 2 | offset << 4, cells};
+}
+
+// A splitting plane in the tet's barycentric frame: c[i] is the signed distance of probe tet.v[i] to the
+// plane divided by the largest of the four absolute distances (so max |c[i]| = 1). Its value at a point with
+// weights w is dot(c, w): the signed distance in units of that largest distance. GLSL: vec4.
+struct alignas(16) OcclusionPlane {
+  float c[4] = {0, 0, 0, 0};
+};
+static_assert(sizeof(OcclusionPlane) == 16, "OcclusionPlane is a std430 vec4");
+
+// Shadow map texels: 4 probes x 16 sub-triangles, one byte each, texel (i, k) at block * 64 + 16 i + k.
+// Sub-triangle k of the face opposite probe tet.v[i] (see shadowMapCell) stores the fraction of the way from
+// the probe to that sub-triangle's centre at which the first geometry is met, as floor(254 f) (0..254), or
+// 255 when nothing is met before the face.
+inline constexpr int kShadowMapTexels = 16;
+inline constexpr int kShadowMapBlockBytes = 4 * kShadowMapTexels;
+inline constexpr uint8_t kShadowMapNoHit = 255;
+inline constexpr float kShadowMapScale = 254.0f;
+
+// The occlusion data of a level. `tets` empty means the level has none: nothing stored, nothing evaluated
+// (every probe visible). Otherwise tets.size() == level.tets.size().
+struct LevelOcclusion {
+  std::vector<TetOcclusion> tets;
+  std::vector<OcclusionPlane> planes;
+  std::vector<uint8_t> shadowMaps;  // multiple of 64 bytes
+
+  bool empty() const { return tets.empty(); }
+  size_t bytes() const {
+    return tets.size() * sizeof(TetOcclusion) + planes.size() * sizeof(OcclusionPlane) + shadowMaps.size();
+  }
+};
+
+// Sub-triangle of a face's 4x4 subdivision. The face opposite probe i has corners A, B, C = the other three
+// tet vertices in increasing slot order; (u, v) are the barycentrics of B and C (A gets 1-u-v). Row r (v in
+// [r/4, (r+1)/4)) holds 7, 5, 3, 1 sub-triangles for r = 0..3, numbered along u, "lower" (pointing down in v)
+// before "upper": index = {0, 7, 12, 15}[r] + 2 floor(4u) + upper. Points outside the face are clamped onto
+// it.
+int shadowMapCell(float u, float v);
+// The (u, v) centre of sub-triangle `cell` (0..15): the point shadowMapCell maps back to `cell`.
+glm::vec2 shadowMapCellCentre(int cell);
+
+// Barycentric weights moved by the bias rule above for unit or non-unit normal n (zero: unchanged).
+glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3& normal);
+
+// The single-tet kernel (what the GLSL mirrors). `planes` points at the tet's first plane, `shadowMap` at
+// its 64-byte block (either may be null when the kind does not use it). `weights` are the raw barycentric
+// weights of the point (may be slightly outside [0,1]); `normal` as in biasWeights. Returns per-probe
+// visibility in [0, 1] (1 = visible) for tet.v[0..3].
+glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* planes,
+                               const uint8_t* shadowMap, const Tet& tet, const glm::vec4& weights,
+                               const glm::vec3& normal);
+
+// Per-probe visibility of tet.v[0..3] seen from local-frame point `local` (metres, relative to level.origin)
+// on a surface with normal `normal` (world = local frame orientation; any length; zero for volumes). Every
+// probe is visible (vec4(1)) when `occlusion` is empty, `tet` is out of range, or the tet stores nothing.
+// Never throws; finite for finite input.
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const glm::vec3& local, const glm::vec3& normal);
+
+// Weights after occlusion: weights * visibility, renormalized to sum to 1. When the visible weight sum s is
+// below kOcclusionFallbackSum (every probe occluded), the result blends continuously into the fallback, the
+// unoccluded weights: (s/k) renormalized + (1 - s/k) weights. Non-finite or negative inputs are treated as
+// 0 (weights) or 1 (visibility); weights that do not sum to a positive number give 0.25 each. The result is
+// always finite, non-negative and sums to 1.
+glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility);
+
+}  // namespace tetraprobe

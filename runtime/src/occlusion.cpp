@@ -1,0 +1,168 @@
+// Run-time evaluation of per-tet probe occlusion: splitting planes and 16-texel shadow maps (Killzone Shadow
+// Fall, Valient GDC 2014), all in the tet's barycentric frame so the GPU mirror needs only the weights it
+// has. Contract and constants: runtime/include/tetraprobe/runtime/occlusion.h; layout: docs/occlusion.md.
+#include "tetraprobe/runtime/occlusion.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+namespace tetraprobe {
+namespace {
+
+constexpr int kRowStart[4] = {0, 7, 12, 15};
+
+// GLSL smoothstep (edge0 < edge1).
+inline bool finite3(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+inline bool finite4(const glm::vec4& v) {
+  return finite3(glm::vec3(v)) && std::isfinite(v.w);
+}
+
+inline float smoothStep(float e0, float e1, float x) {
+  const float t = std::clamp((x - e0) / (e1 - e0), 0.0f, 1.0f);
+  return t * t * (3.0f - 2.0f * t);
+}
+
+glm::vec4 planesVisibility(const TetOcclusion& rec, const OcclusionPlane* planes, const glm::vec4& w) {
+  const uint32_t count = rec.planeCount();
+  if (count == 0 || count > 3 || planes == nullptr) return glm::vec4(1.0f);
+  float t[3] = {1.0f, 1.0f, 1.0f};  // weight of the positive side of each plane
+  for (uint32_t k = 0; k < count; ++k) {
+    const glm::vec4 c(planes[k].c[0], planes[k].c[1], planes[k].c[2], planes[k].c[3]);
+    t[k] = smoothStep(-kOcclusionPlaneFalloff, kOcclusionPlaneFalloff, glm::dot(c, w));
+  }
+  glm::vec4 vis(0.0f);
+  for (uint32_t cell = 0; cell < (1u << count); ++cell) {
+    float weight = 1.0f;
+    for (uint32_t k = 0; k < count; ++k) weight *= (cell >> k & 1u) ? t[k] : 1.0f - t[k];
+    const uint32_t mask = rec.cells >> (4 * cell) & 15u;
+    for (int i = 0; i < 4; ++i) vis[i] += (mask >> i & 1u) ? weight : 0.0f;
+  }
+  return glm::clamp(vis, 0.0f, 1.0f);
+}
+
+glm::vec4 shadowMapVisibility(const uint8_t* texels, const glm::vec4& w) {
+  if (texels == nullptr) return glm::vec4(1.0f);
+  glm::vec4 vis(1.0f);
+  for (int i = 0; i < 4; ++i) {
+    // The ray from probe i through the point leaves the tet on the opposite face at barycentrics
+    // w_j / (1 - w_i) (j != i), after a fraction 1 - w_i of its length inside the tet.
+    int slot[3], n = 0;
+    for (int j = 0; j < 4; ++j)
+      if (j != i) slot[n++] = j;
+    const float a = std::max(w[slot[0]], 0.0f), b = std::max(w[slot[1]], 0.0f),
+                c = std::max(w[slot[2]], 0.0f);
+    const float sum = a + b + c;
+    const float u = sum > 0.0f ? b / sum : 1.0f / 3.0f, v = sum > 0.0f ? c / sum : 1.0f / 3.0f;
+    const uint8_t q = texels[i * kShadowMapTexels + shadowMapCell(u, v)];
+    if (q == kShadowMapNoHit) continue;
+    const float depth = (float(q) + 0.5f) / kShadowMapScale;  // centre of the quantization bin
+    const float f = 1.0f - w[i];
+    vis[i] = 1.0f - smoothStep(depth - kOcclusionShadowFalloff, depth + kOcclusionShadowFalloff, f);
+  }
+  return vis;
+}
+
+}  // namespace
+
+int shadowMapCell(float u, float v) {
+  u = std::isfinite(u) ? std::clamp(u, 0.0f, 1.0f) : 0.0f;
+  v = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+  if (u + v > 1.0f) {  // clamp onto the face along the diagonal
+    const float s = u + v;
+    u /= s;
+    v /= s;
+  }
+  const float x = 4.0f * u, y = 4.0f * v;
+  int iu = std::min(int(x), 3), iv = std::min(int(y), 3);
+  bool upper = (x - float(iu)) + (y - float(iv)) > 1.0f;
+  if (iu + iv >= 3) {  // the last diagonal holds lower sub-triangles only (rounding on the hypotenuse)
+    iu = std::min(iu, 3 - iv);
+    upper = false;
+  }
+  return kRowStart[iv] + 2 * iu + (upper ? 1 : 0);
+}
+
+glm::vec2 shadowMapCellCentre(int cell) {
+  cell = std::clamp(cell, 0, kShadowMapTexels - 1);
+  int row = 3;
+  while (kRowStart[row] > cell) --row;
+  const int k = cell - kRowStart[row];
+  const int iu = k / 2;
+  const float off = (k & 1) ? 2.0f / 3.0f : 1.0f / 3.0f;
+  return glm::vec2((float(iu) + off) / 4.0f, (float(row) + off) / 4.0f);
+}
+
+glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3& normal) {
+  const glm::vec3 g0(tet.row[0][0], tet.row[0][1], tet.row[0][2]);
+  const glm::vec3 g1(tet.row[1][0], tet.row[1][1], tet.row[1][2]);
+  const glm::vec3 g2(tet.row[2][0], tet.row[2][1], tet.row[2][2]);
+  const glm::vec4 gn(glm::dot(g0, normal), glm::dot(g1, normal), glm::dot(g2, normal),
+                     -glm::dot(g0 + g1 + g2, normal));
+  const float m =
+      std::max(std::max(std::abs(gn.x), std::abs(gn.y)), std::max(std::abs(gn.z), std::abs(gn.w)));
+  if (!(m > 0.0f) || !std::isfinite(m)) return weights;
+  return weights + gn * (kOcclusionBias / m);
+}
+
+glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* planes,
+                               const uint8_t* shadowMap, const Tet& tet, const glm::vec4& weights,
+                               const glm::vec3& normal) {
+  switch (rec.kind()) {
+    case kOcclusionPlanes:
+      return planesVisibility(rec, planes, biasWeights(tet, weights, normal));
+    case kOcclusionShadowMaps:
+      return shadowMapVisibility(shadowMap, biasWeights(tet, weights, normal));
+    default:
+      return glm::vec4(1.0f);
+  }
+}
+
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const glm::vec3& local, const glm::vec3& normal) {
+  if (occlusion.tets.empty() || tet < 0 || size_t(tet) >= occlusion.tets.size() ||
+      size_t(tet) >= level.tets.size())
+    return glm::vec4(1.0f);
+  const TetOcclusion& rec = occlusion.tets[size_t(tet)];
+  const Tet& t = level.tets[size_t(tet)];
+  glm::vec4 w;
+  for (int i = 0; i < 3; ++i)
+    w[i] = t.row[i][0] * local.x + t.row[i][1] * local.y + t.row[i][2] * local.z + t.row[i][3];
+  w[3] = 1.0f - w[0] - w[1] - w[2];
+  const glm::vec3 n = finite3(normal) ? normal : glm::vec3(0.0f);
+  const OcclusionPlane* planes = nullptr;
+  const uint8_t* texels = nullptr;
+  if (rec.kind() == kOcclusionPlanes) {
+    if (size_t(rec.offset()) + rec.planeCount() > occlusion.planes.size()) return glm::vec4(1.0f);
+    planes = occlusion.planes.data() + rec.offset();
+  } else if (rec.kind() == kOcclusionShadowMaps) {
+    if ((size_t(rec.offset()) + 1) * kShadowMapBlockBytes > occlusion.shadowMaps.size())
+      return glm::vec4(1.0f);
+    texels = occlusion.shadowMaps.data() + size_t(rec.offset()) * kShadowMapBlockBytes;
+  }
+  const glm::vec4 vis = evaluateTetOcclusion(rec, planes, texels, t, w, n);
+  return finite4(vis) ? vis : glm::vec4(1.0f);
+}
+
+glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility) {
+  glm::vec4 w, v;
+  float sumW = 0.0f;
+  for (int i = 0; i < 4; ++i) {
+    w[i] = std::isfinite(weights[i]) && weights[i] > 0.0f ? weights[i] : 0.0f;
+    v[i] = std::isfinite(visibility[i]) ? std::clamp(visibility[i], 0.0f, 1.0f) : 1.0f;
+    sumW += w[i];
+  }
+  if (!(sumW > 0.0f) || !std::isfinite(sumW)) return glm::vec4(0.25f);
+  w /= sumW;
+  const glm::vec4 o = w * v;
+  const float s = o.x + o.y + o.z + o.w;
+  if (s >= kOcclusionFallbackSum) return o / s;
+  const float a = s / kOcclusionFallbackSum;
+  const glm::vec4 visible = s > 0.0f ? o / s : glm::vec4(0.0f);
+  return a * visible + (1.0f - a) * w;
+}
+
+}  // namespace tetraprobe

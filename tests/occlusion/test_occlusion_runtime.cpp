@@ -1,0 +1,179 @@
+// Run-time occlusion evaluation (runtime/occlusion.h): shadow-map cell numbering, the bias rule, and the
+// renormalization with its all-occluded fallback. No ray tracing here.
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "test_levels.h"
+#include "tetraprobe/runtime/occlusion.h"
+
+namespace tetraprobe {
+namespace {
+
+// Corners (u, v) of sub-triangle `cell`, derived independently of shadowMapCell from the row layout.
+void cellCorners(int cell, glm::vec2 out[3]) {
+  int row = 0, k = cell;
+  while (k >= 2 * (4 - row) - 1) k -= 2 * (4 - row++) - 1;
+  const int iu = k / 2;
+  const float u = float(iu) / 4.0f, v = float(row) / 4.0f, h = 0.25f;
+  if (k % 2 == 0) {
+    out[0] = {u, v}, out[1] = {u + h, v}, out[2] = {u, v + h};
+  } else {
+    out[0] = {u + h, v}, out[1] = {u + h, v + h}, out[2] = {u, v + h};
+  }
+}
+
+bool inTriangle(glm::vec2 p, const glm::vec2 t[3], float eps) {
+  auto cross = [](glm::vec2 a, glm::vec2 b) { return a.x * b.y - a.y * b.x; };
+  const float d0 = cross(t[1] - t[0], p - t[0]), d1 = cross(t[2] - t[1], p - t[1]),
+              d2 = cross(t[0] - t[2], p - t[2]);
+  return (d0 >= -eps && d1 >= -eps && d2 >= -eps) || (d0 <= eps && d1 <= eps && d2 <= eps);
+}
+
+// The build traces toward each sub-triangle's centre and the runtime looks the texel up by cell: the two
+// numberings must agree, or every shadow map reads the wrong texel.
+TEST(OcclusionRuntime, ShadowMapCellCentresRoundTrip) {
+  for (int k = 0; k < kShadowMapTexels; ++k) {
+    const glm::vec2 c = shadowMapCellCentre(k);
+    EXPECT_EQ(shadowMapCell(c.x, c.y), k) << "centre " << c.x << "," << c.y;
+  }
+}
+
+// Every point of the face maps to the sub-triangle that contains it, and the 16 tile the face.
+TEST(OcclusionRuntime, ShadowMapCellsTileTheFace) {
+  const int n = 97;
+  int count[kShadowMapTexels] = {};
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i + j <= n; ++i) {
+      const float u = float(i) / n, v = float(j) / n;
+      const int k = shadowMapCell(u, v);
+      ASSERT_GE(k, 0);
+      ASSERT_LT(k, kShadowMapTexels);
+      glm::vec2 t[3];
+      cellCorners(k, t);
+      EXPECT_TRUE(inTriangle({u, v}, t, 1e-6f)) << "u=" << u << " v=" << v << " cell " << k;
+      ++count[k];
+    }
+  for (int k = 0; k < kShadowMapTexels; ++k) EXPECT_GT(count[k], 0) << "cell " << k;
+  // Outside the face (rounding, points outside the tet): clamped, still a valid cell.
+  for (glm::vec2 p : {glm::vec2(-1, 0.5f), glm::vec2(0.7f, 0.7f), glm::vec2(2, 2), glm::vec2(NAN, 0.2f)}) {
+    const int k = shadowMapCell(p.x, p.y);
+    EXPECT_GE(k, 0);
+    EXPECT_LT(k, kShadowMapTexels);
+  }
+}
+
+// The bias moves no barycentric weight by more than kOcclusionBias, keeps the sum 1, ignores the normal's
+// length, and a zero normal moves nothing.
+TEST(OcclusionRuntime, BiasMovesNoWeightMoreThanTheBias) {
+  const Level level = test::makeLevel(test::regularTet());
+  const Tet& t = level.tets[0];
+  const glm::vec4 w(0.1f, 0.2f, 0.3f, 0.4f);
+  for (glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0.3f, -2.0f, 0.5f), glm::vec3(-1, 1, 1)}) {
+    const glm::vec4 b = biasWeights(t, w, n);
+    const glm::vec4 b2 = biasWeights(t, w, 7.0f * n);
+    float maxMove = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+      maxMove = std::max(maxMove, std::abs(b[i] - w[i]));
+      EXPECT_NEAR(b[i], b2[i], 1e-6f);
+    }
+    EXPECT_NEAR(maxMove, kOcclusionBias, 1e-6f);
+    EXPECT_NEAR(b.x + b.y + b.z + b.w, 1.0f, 1e-5f);
+  }
+  const glm::vec4 z = biasWeights(t, w, glm::vec3(0.0f));
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(z[i], w[i]);
+}
+
+// An occluded probe drops out and the rest are renormalized.
+TEST(OcclusionRuntime, ApplyOcclusionDropsOccludedProbes) {
+  const glm::vec4 r = applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(1, 0, 1, 0));
+  EXPECT_NEAR(r.x, 0.25f, 1e-6f);
+  EXPECT_EQ(r.y, 0.0f);
+  EXPECT_NEAR(r.z, 0.75f, 1e-6f);
+  EXPECT_EQ(r.w, 0.0f);
+  const glm::vec4 same = applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(1.0f));
+  EXPECT_NEAR(same.w, 0.4f, 1e-6f);
+}
+
+// Whatever comes in (all occluded, NaN, Inf, negative, zero weights), the result is finite, non-negative and
+// sums to 1; all occluded gives the unoccluded weights (the documented fallback), and the blend into it is
+// continuous.
+TEST(OcclusionRuntime, ApplyOcclusionNeverNaNAndSumsToOne) {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const glm::vec4 all = applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(0.0f));
+  EXPECT_NEAR(all.z, 0.3f, 1e-6f);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const float specials[] = {0.0f, 1.0f, -1.0f, nan, inf, -inf, 1e-30f, 1e30f};
+  for (int k = 0; k < 20000; ++k) {
+    glm::vec4 w, v;
+    for (int i = 0; i < 4; ++i) {
+      w[i] = (k % 3 == 0) ? specials[rng() % 8] : u(rng);
+      v[i] = (k % 2 == 0) ? specials[rng() % 8] : (u(rng) < 0.5f ? 0.0f : u(rng) * 1e-3f);
+    }
+    const glm::vec4 r = applyOcclusion(w, v);
+    float sum = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+      ASSERT_TRUE(std::isfinite(r[i])) << "w=" << w[i] << " v=" << v[i];
+      ASSERT_GE(r[i], 0.0f);
+      sum += r[i];
+    }
+    ASSERT_NEAR(sum, 1.0f, 1e-5f);
+  }
+  // Continuity at the fallback threshold: a visible sum just above and just below it give nearly equal
+  // weights.
+  const glm::vec4 w(0.25f);
+  const float s = kOcclusionFallbackSum;
+  const glm::vec4 above = applyOcclusion(w, glm::vec4(4.0f * s * 1.001f, 0, 0, 0));
+  const glm::vec4 below = applyOcclusion(w, glm::vec4(4.0f * s * 0.999f, 0, 0, 0));
+  EXPECT_NEAR(above.x, below.x, 0.01f);
+}
+
+// No occlusion data (or a tet out of range) means every probe is visible: nothing is evaluated.
+TEST(OcclusionRuntime, EmptyDataMeansAllVisible) {
+  const Level level = test::makeLevel(test::regularTet());
+  LevelOcclusion none;
+  EXPECT_EQ(none.bytes(), 0u);
+  const glm::vec4 v = occlusionVisibility(level, none, 0, glm::vec3(0.5f), glm::vec3(0, 0, 1));
+  EXPECT_EQ(v, glm::vec4(1.0f));
+  LevelOcclusion one;
+  one.tets.resize(1);
+  one.planes.push_back(OcclusionPlane{{1, 1, -1, -1}});
+  one.tets[0] = makeTetOcclusion(kOcclusionPlanes, 1, 0, 0x0u);  // both cells see nothing
+  EXPECT_EQ(occlusionVisibility(level, one, 5, glm::vec3(0.5f), glm::vec3(0.0f)), glm::vec4(1.0f));
+  EXPECT_EQ(occlusionVisibility(level, one, -1, glm::vec3(0.5f), glm::vec3(0.0f)), glm::vec4(1.0f));
+  // A plane record pointing past the array is answered as all visible, not read.
+  one.tets[0] = makeTetOcclusion(kOcclusionPlanes, 3, 0, 0);
+  EXPECT_EQ(occlusionVisibility(level, one, 0, glm::vec3(0.5f), glm::vec3(0.0f)), glm::vec4(1.0f));
+}
+
+// A hand-written plane record: probes with c > 0 are seen from the positive side only, with a soft band of
+// half-width kOcclusionPlaneFalloff across the plane.
+TEST(OcclusionRuntime, PlaneCellsSelectByValueWithSoftBand) {
+  const Level level = test::makeLevel(test::regularTet());
+  const Tet& t = level.tets[0];
+  OcclusionPlane plane;
+  uint32_t posMask = 0, negMask = 0;
+  for (int i = 0; i < 4; ++i) {
+    const float z = level.probes[size_t(t.v[i])].z;
+    plane.c[i] = z > 0.5f ? 1.0f : -1.0f;  // the plane z = 0.5
+    (z > 0.5f ? posMask : negMask) |= 1u << i;
+  }
+  LevelOcclusion occ;
+  occ.tets = {makeTetOcclusion(kOcclusionPlanes, 1, 0, negMask | posMask << 4)};
+  occ.planes = {plane};
+  auto vis = [&](float z) {
+    return occlusionVisibility(level, occ, 0, glm::vec3(0.5f, 0.5f, z), glm::vec3(0.0f));
+  };
+  for (int i = 0; i < 4; ++i) {
+    const bool up = (posMask >> i) & 1u;
+    EXPECT_EQ(vis(0.7f)[i], up ? 1.0f : 0.0f);
+    EXPECT_EQ(vis(0.3f)[i], up ? 0.0f : 1.0f);
+    EXPECT_NEAR(vis(0.5f)[i], 0.5f, 1e-4f);  // on the plane: half of each side
+  }
+}
+
+}  // namespace
+}  // namespace tetraprobe
