@@ -31,6 +31,8 @@ constexpr double kMinPolygonArea = 1e-8;   // x scale^2: a triangle touching the
 constexpr double kClusterCos = 0.9659258;  // cos 15 deg: polygons within it share a plane...
 constexpr double kClusterOffset = 0.03;    // ...when their centroids are within this x scale of it
 constexpr double kRayOffset = 1e-5;        // x scale: surface samples start this far off the surface
+constexpr int kTexelRays = 9;              // shadow-map rays per texel (3x3 subdivision of its sub-triangle)
+constexpr int kTexelRank = 4;              // a texel stores the median of their hit fractions
 
 // One sampled shading point and the rays' answers for the tet's four probes.
 struct Sample {
@@ -250,26 +252,31 @@ bool makePlanes(Candidate& c, const std::vector<Cluster>& clusters, uint32_t cou
   return true;
 }
 
+// One ray per lattice vertex of each probe's opposite face (15 per probe): the depth the runtime
+// interpolates harmonically inside each of the 16 sub-triangles.
 void makeShadowMaps(Candidate& c, const Context& ctx, const TetFrame& frame, uint64_t& rays) {
+  c.texels.fill(kShadowMapNoHit);
   for (int i = 0; i < 4; ++i) {
     int slot[3], n = 0;
     for (int j = 0; j < 4; ++j)
       if (j != i) slot[n++] = j;
     const glm::vec3 probe = toWorld(ctx.level, frame.p[i]);
-    for (int k = 0; k < kShadowMapTexels; ++k) {
-      const glm::vec2 uv = shadowMapCellCentre(k);
-      const glm::dvec3 target = frame.p[slot[0]] * (1.0 - uv.x - uv.y) + frame.p[slot[1]] * double(uv.x) +
-                                frame.p[slot[2]] * double(uv.y);
-      const glm::vec3 d = toWorld(ctx.level, target) - probe;
-      const float len = glm::length(d);
-      uint8_t q = kShadowMapNoHit;
-      if (len > 0.0f) {
-        const Hit hit = ctx.tracer.intersect(probe, d / len, 0.0f, len);
-        ++rays;
-        if (hit.hit) q = uint8_t(std::min(254.0f, std::floor(hit.t / len * kShadowMapScale)));
+    for (int b = 0; b <= 4; ++b)
+      for (int a = 0; a + b <= 4; ++a) {
+        const double u = a / 4.0, v = b / 4.0;
+        const glm::dvec3 target =
+            frame.p[slot[0]] * (1.0 - u - v) + frame.p[slot[1]] * u + frame.p[slot[2]] * v;
+        const glm::vec3 d = toWorld(ctx.level, target) - probe;
+        const float len = glm::length(d);
+        uint8_t q = kShadowMapNoHit;
+        if (len > 0.0f) {
+          const Hit hit = ctx.tracer.intersect(probe, d / len, 0.0f, len);
+          ++rays;
+          if (hit.hit)
+            q = uint8_t(std::min(254.0, std::round(double(hit.t) / double(len) * double(kShadowMapScale))));
+        }
+        c.texels[size_t(i * kShadowMapTexels + shadowMapVertex(a, b))] = q;
       }
-      c.texels[size_t(i * kShadowMapTexels + k)] = q;
-    }
   }
   c.rec = makeTetOcclusion(kOcclusionShadowMaps, 0, 0, 0);
 }

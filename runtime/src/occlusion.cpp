@@ -57,18 +57,16 @@ glm::vec4 shadowMapVisibility(const uint8_t* texels, const glm::vec4& w) {
                 c = std::max(w[slot[2]], 0.0f);
     const float sum = a + b + c;
     const float u = sum > 0.0f ? b / sum : 1.0f / 3.0f, v = sum > 0.0f ? c / sum : 1.0f / 3.0f;
-    const uint8_t q = texels[i * kShadowMapTexels + shadowMapCell(u, v)];
-    if (q == kShadowMapNoHit) continue;
-    const float depth = (float(q) + 0.5f) / kShadowMapScale;  // centre of the quantization bin
+    const float depth = shadowMapDepth(texels + i * kShadowMapTexels, u, v);
+    if (depth > 1.0f) continue;
     const float f = 1.0f - w[i];
     vis[i] = 1.0f - smoothStep(depth - kOcclusionShadowFalloff, depth + kOcclusionShadowFalloff, f);
   }
   return vis;
 }
 
-}  // namespace
-
-int shadowMapCell(float u, float v) {
+// Clamps (u, v) onto the face and finds its sub-triangle: cell row iv, column iu, upper or lower.
+void locateOnFace(float& u, float& v, int& iu, int& iv, bool& upper) {
   u = std::isfinite(u) ? std::clamp(u, 0.0f, 1.0f) : 0.0f;
   v = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
   if (u + v > 1.0f) {  // clamp onto the face along the diagonal
@@ -77,13 +75,52 @@ int shadowMapCell(float u, float v) {
     v /= s;
   }
   const float x = 4.0f * u, y = 4.0f * v;
-  int iu = std::min(int(x), 3), iv = std::min(int(y), 3);
-  bool upper = (x - float(iu)) + (y - float(iv)) > 1.0f;
+  iu = std::min(int(x), 3);
+  iv = std::min(int(y), 3);
+  upper = (x - float(iu)) + (y - float(iv)) > 1.0f;
   if (iu + iv >= 3) {  // the last diagonal holds lower sub-triangles only (rounding on the hypotenuse)
     iu = std::min(iu, 3 - iv);
     upper = false;
   }
+}
+
+}  // namespace
+
+int shadowMapCell(float u, float v) {
+  int iu, iv;
+  bool upper;
+  locateOnFace(u, v, iu, iv, upper);
   return kRowStart[iv] + 2 * iu + (upper ? 1 : 0);
+}
+
+float shadowMapDepth(const uint8_t* probeTexels, float u, float v) {
+  int iu, iv;
+  bool upper;
+  locateOnFace(u, v, iu, iv, upper);
+  const float fu = 4.0f * u - float(iu), fv = 4.0f * v - float(iv);
+  int corner[3];
+  float b[3];
+  if (upper) {
+    corner[0] = shadowMapVertex(iu + 1, iv + 1), b[0] = fu + fv - 1.0f;
+    corner[1] = shadowMapVertex(iu, iv + 1), b[1] = 1.0f - fu;
+    corner[2] = shadowMapVertex(iu + 1, iv), b[2] = 1.0f - fv;
+  } else {
+    corner[0] = shadowMapVertex(iu, iv), b[0] = 1.0f - fu - fv;
+    corner[1] = shadowMapVertex(iu + 1, iv), b[1] = fu;
+    corner[2] = shadowMapVertex(iu, iv + 1), b[2] = fv;
+  }
+  float inv = 0.0f, sum = 0.0f;
+  bool anyHit = false;
+  for (int k = 0; k < 3; ++k) {
+    b[k] = std::max(b[k], 0.0f);
+    sum += b[k];
+    const uint8_t q = probeTexels[corner[k]];
+    anyHit = anyHit || q != kShadowMapNoHit;
+    const float d = q == kShadowMapNoHit ? 1.0f : std::max(float(q), 0.5f) / kShadowMapScale;
+    inv += b[k] / d;
+  }
+  if (!anyHit) return 2.0f;
+  return sum > 0.0f ? sum / inv : 1.0f;
 }
 
 glm::vec2 shadowMapCellCentre(int cell) {

@@ -1,5 +1,6 @@
 // Run-time occlusion evaluation (runtime/occlusion.h): shadow-map cell numbering, the bias rule, and the
 // renormalization with its all-occluded fallback. No ray tracing here.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -63,6 +64,34 @@ TEST(OcclusionRuntime, ShadowMapCellsTileTheFace) {
     EXPECT_GE(k, 0);
     EXPECT_LT(k, kShadowMapTexels);
   }
+}
+
+// A planar occluder met by every corner ray is reproduced exactly (up to quantization) everywhere on the
+// face: 1/depth is affine in the face point for a plane, and the lookup interpolates 1/depth.
+TEST(OcclusionRuntime, ShadowMapDepthIsExactForPlanes) {
+  // Probe at the origin, face points F(u, v) = A + u (B - A) + v (C - A); plane n.x = 0.2 in front of it.
+  const glm::vec3 A(1, 0, 0), B(0, 1, 0), C(0, 0, 1), n = glm::normalize(glm::vec3(1.0f, 0.6f, 0.3f));
+  auto exact = [&](float u, float v) {
+    const glm::vec3 F = A + u * (B - A) + v * (C - A);
+    return 0.2f / glm::dot(n, F);  // the ray t F meets the plane at t = 0.2 / n.F
+  };
+  uint8_t texels[kShadowMapTexels];
+  std::fill(texels, texels + kShadowMapTexels, kShadowMapNoHit);
+  for (int b = 0; b <= 4; ++b)
+    for (int a = 0; a + b <= 4; ++a)
+      texels[shadowMapVertex(a, b)] = uint8_t(std::round(exact(a / 4.0f, b / 4.0f) * kShadowMapScale));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+  for (int k = 0; k < 2000; ++k) {
+    float u = uni(rng), v = uni(rng);
+    if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+    const float e = exact(u, v);
+    ASSERT_LT(e, 1.0f);
+    EXPECT_NEAR(shadowMapDepth(texels, u, v), e, 2.0f / kShadowMapScale) << "u=" << u << " v=" << v;
+  }
+  // No corner met anything: beyond the face.
+  std::fill(texels, texels + kShadowMapTexels, kShadowMapNoHit);
+  EXPECT_GT(shadowMapDepth(texels, 0.3f, 0.3f), 1.0f);
 }
 
 // The bias moves no barycentric weight by more than kOcclusionBias, keeps the sum 1, ignores the normal's

@@ -72,14 +72,22 @@ struct alignas(16) OcclusionPlane {
 };
 static_assert(sizeof(OcclusionPlane) == 16, "OcclusionPlane is a std430 vec4");
 
-// Shadow map texels: 4 probes x 16 sub-triangles, one byte each, texel (i, k) at block * 64 + 16 i + k.
-// Sub-triangle k of the face opposite probe tet.v[i] (see shadowMapCell) stores the fraction of the way from
-// the probe to that sub-triangle's centre at which the first geometry is met, as floor(254 f) (0..254), or
-// 255 when nothing is met before the face.
+// Shadow maps: 4 probes x 16 bytes, probe slot i at block * 64 + 16 i. The face opposite probe tet.v[i] is
+// split 4x4 into 16 sub-triangles (shadowMapCell); byte shadowMapVertex(a, b) (15 used, byte 15 = 255) holds
+// the depth at lattice vertex (u, v) = (a/4, b/4), a + b <= 4: the fraction f of the way from the probe to
+// that face point at which the first geometry is met, as round(254 f) (0..254), or 255 when nothing is met
+// before the face. Inside a sub-triangle the depth is interpolated from its three corners harmonically,
+// 1/d = sum_k b_k / d_k (a no-hit corner counts as d = 1): exact for any planar occluder met by all three
+// corner rays, where one value per sub-triangle (the centre ray) misjudges every point off the centre.
 inline constexpr int kShadowMapTexels = 16;
 inline constexpr int kShadowMapBlockBytes = 4 * kShadowMapTexels;
 inline constexpr uint8_t kShadowMapNoHit = 255;
 inline constexpr float kShadowMapScale = 254.0f;
+inline constexpr int kShadowMapLatticeVertices = 15;
+inline constexpr int shadowMapVertex(int a, int b) {
+  return b * 5 - b * (b - 1) / 2 + a;
+}  // a + b <= 4
+static_assert(shadowMapVertex(0, 4) == kShadowMapLatticeVertices - 1, "15 lattice vertices in 16 bytes");
 
 // The occlusion data of a level. `tets` empty means the level has none: nothing stored, nothing evaluated
 // (every probe visible). Otherwise tets.size() == level.tets.size().
@@ -102,6 +110,10 @@ struct LevelOcclusion {
 int shadowMapCell(float u, float v);
 // The (u, v) centre of sub-triangle `cell` (0..15): the point shadowMapCell maps back to `cell`.
 glm::vec2 shadowMapCellCentre(int cell);
+
+// Interpolated depth (fraction of the way to the face, see above) of one probe's 16 bytes at face point
+// (u, v), clamped onto the face; > 1 (2.0) when none of the sub-triangle's corners met geometry.
+float shadowMapDepth(const uint8_t* probeTexels, float u, float v);
 
 // Barycentric weights moved by the bias rule above for unit or non-unit normal n (zero: unchanged).
 glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3& normal);
