@@ -8,7 +8,7 @@ TP := $(BUILD_DIR)/bin/tetraprobe
 SAMPLE := samples/two_rooms/two_rooms.scene.json
 WERROR := $(if $(CI),ON,OFF)
 
-.PHONY: all setup configure build demo test bench clean
+.PHONY: all setup configure build demo test bench update-references clean
 
 all: build
 
@@ -29,6 +29,11 @@ demo: build
 
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+# Re-render the visual regression references after an intended change (look at them before committing).
+update-references: build
+	@cd $(BUILD_DIR) && TETRAPROBE_UPDATE_REFERENCES=1 ctest -R Visual --output-on-failure
+	@git status --short tests/visual/reference
 
 bench: build
 	@$(BUILD_DIR)/bin/tetraprobe_bench

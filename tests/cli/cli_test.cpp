@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct CliRun {
   int code = -1;
   std::string out;  // stdout
   std::string err;  // stderr
@@ -40,11 +40,12 @@ class Cli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  Run run(const std::string& args) {
+  CliRun run(const std::string& args) {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(TETRAPROBE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string();
+    const std::string cmd =
+        std::string(TETRAPROBE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string();
     const int status = std::system(cmd.c_str());
-    Run r;
+    CliRun r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
     r.out = slurp(out);
     r.err = slurp(err);
@@ -66,14 +67,19 @@ class Cli : public ::testing::Test {
     return true;
   }
 
-  static std::string sample() { return std::string(TETRAPROBE_SOURCE_DIR) + "/samples/two_rooms/two_rooms.scene.json"; }
+  static std::string sample() {
+    return std::string(TETRAPROBE_SOURCE_DIR) + "/samples/two_rooms/two_rooms.scene.json";
+  }
 
   fs::path dir_;
 };
 
-int lineCount(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+int lineCount(const std::string& s) {
+  return int(std::count(s.begin(), s.end(), '\n'));
+}
 
-// A closed box (inward faces) with an emissive ceiling tile: small enough to bake in well under a second.
+// A closed 4 x 3 x 4 m box whose faces point inward (counter-clockwise seen from inside) with an emissive
+// ceiling tile facing down: small enough to bake in well under a second.
 const char* kBoxObj = R"(mtllib box.mtl
 v 0 0 0
 v 4 0 0
@@ -88,21 +94,21 @@ v 2.5 2.99 1.5
 v 2.5 2.99 2.5
 v 1.5 2.99 2.5
 usemtl wall
-f 1 2 3
-f 1 3 4
-f 5 8 7
-f 5 7 6
-f 1 5 6
-f 1 6 2
-f 2 6 7
-f 2 7 3
-f 3 7 8
-f 3 8 4
-f 4 8 5
-f 4 5 1
+f 3 2 1
+f 4 3 1
+f 7 8 5
+f 6 7 5
+f 6 5 1
+f 2 6 1
+f 7 6 2
+f 3 7 2
+f 8 7 3
+f 4 8 3
+f 5 8 4
+f 1 5 4
 usemtl light
-f 9 12 11
-f 9 11 10
+f 11 12 9
+f 10 11 9
 )";
 const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
 
@@ -111,7 +117,7 @@ const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 1
 // Every command answers --help with usage on stdout and exit 0.
 TEST_F(Cli, HelpExitsZeroForEveryCommand) {
   for (const char* c : {"bake", "inspect", "query", "render", "eval"}) {
-    const Run r = run(std::string(c) + " --help");
+    const CliRun r = run(std::string(c) + " --help");
     EXPECT_EQ(r.code, 0) << c << ": " << r.err;
     EXPECT_NE(r.out.find("usage: tetraprobe"), std::string::npos) << c;
   }
@@ -120,11 +126,14 @@ TEST_F(Cli, HelpExitsZeroForEveryCommand) {
 
 // Bad usage is exit 2 with exactly one line on stderr.
 TEST_F(Cli, BadUsageExitsTwoWithOneLine) {
-  for (const char* a : {"", "frobnicate", "bake", "bake x.obj", "bake x.obj -o", "bake x.obj -o l.tpb --spacing abc",
-                        "bake x.obj -o l.tpb --no-such-flag", "query", "render a b", "eval a"}) {
-    const Run r = run(a);
+  for (const char* a :
+       {"", "frobnicate", "bake", "bake x.obj", "bake x.obj -o", "bake x.obj -o l.tpb --spacing abc",
+        "bake x.obj -o l.tpb --no-such-flag", "query", "render a b", "eval a"}) {
+    const CliRun r = run(a);
     EXPECT_EQ(r.code, 2) << "'" << a << "': " << r.err;
-    if (std::string(a).size() > 0) EXPECT_EQ(lineCount(r.err), 1) << "'" << a << "': " << r.err;
+    if (std::string(a).size() > 0) {
+      EXPECT_EQ(lineCount(r.err), 1) << "'" << a << "': " << r.err;
+    }
   }
 }
 
@@ -151,12 +160,13 @@ TEST_F(Cli, BadInputExitsTwoAndLeavesNoOutput) {
       {"inspect " + path("box.obj").string(), "box.obj"},
   };
   for (const auto& c : cases) {
-    const Run r = run(c.args);
+    const CliRun r = run(c.args);
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
     EXPECT_EQ(lineCount(r.err), 1) << c.args << "\n" << r.err;
-    EXPECT_NE(r.err.find(c.mentions), std::string::npos) << "error should name '" << c.mentions << "': " << r.err;
-    EXPECT_TRUE(onlyInputsLeft({"box.mtl", "box.obj", "broken.obj", "nan.obj", "empty.obj", "coplanar.csv",
-                                "bad.scene.json"}))
+    EXPECT_NE(r.err.find(c.mentions), std::string::npos)
+        << "error should name '" << c.mentions << "': " << r.err;
+    EXPECT_TRUE(onlyInputsLeft(
+        {"box.mtl", "box.obj", "broken.obj", "nan.obj", "empty.obj", "coplanar.csv", "bad.scene.json"}))
         << c.args;
   }
 }
@@ -167,9 +177,10 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
   const std::string base = "bake " + path("box.obj").string() + " --samples 32 --spacing 0.75";
-  const Run a = run(base + " --threads 1 -o " + path("a.tpb").string() + " --report " + path("a.json").string());
+  const CliRun a =
+      run(base + " --threads 1 -o " + path("a.tpb").string() + " --report " + path("a.json").string());
   ASSERT_EQ(a.code, 0) << a.err;
-  const Run b = run(base + " --threads 2 -o " + path("b.tpb").string());
+  const CliRun b = run(base + " --threads 2 -o " + path("b.tpb").string());
   ASSERT_EQ(b.code, 0) << b.err;
   const std::string ba = slurp(path("a.tpb")), bb = slurp(path("b.tpb"));
   ASSERT_FALSE(ba.empty());
@@ -182,7 +193,7 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   for (const char* stage : {"load", "place", "tetrahedralize", "bake", "write", "total"})
     EXPECT_TRUE(j.at("timings_s").contains(stage)) << stage;
 
-  const Run insp = run("inspect --json " + path("a.tpb").string());
+  const CliRun insp = run("inspect --json " + path("a.tpb").string());
   ASSERT_EQ(insp.code, 0) << insp.err;
   const auto ij = nlohmann::json::parse(insp.out);
   EXPECT_EQ(ij.at("probes").at("count"), j.at("probes").at("count"));
@@ -195,8 +206,8 @@ TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
   ASSERT_EQ(run("bake " + path("box.obj").string() + " --samples 64 -o " + path("l.tpb").string()).code, 0);
-  const Run up = run("query " + path("l.tpb").string() + " 2 1.5 2 0 1 0");
-  const Run down = run("query " + path("l.tpb").string() + " 2 1.5 2 0 -1 0");
+  const CliRun up = run("query " + path("l.tpb").string() + " 2 1.5 2 0 1 0");
+  const CliRun down = run("query " + path("l.tpb").string() + " 2 1.5 2 0 -1 0");
   ASSERT_EQ(up.code, 0) << up.err;
   ASSERT_EQ(down.code, 0) << down.err;
   float ur, ug, ub, dr, dg, db;
@@ -205,12 +216,12 @@ TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
   EXPECT_GT(ug, 2.0f * dg) << "facing the ceiling light should see much more light";
 
   write("pts.csv", "2,1.5,2,0,1,0\n# comment\n2,1.5,2,0,-1,0\n");
-  const Run batch = run("query " + path("l.tpb").string() + " --points " + path("pts.csv").string());
+  const CliRun batch = run("query " + path("l.tpb").string() + " --points " + path("pts.csv").string());
   ASSERT_EQ(batch.code, 0) << batch.err;
   EXPECT_EQ(batch.out, up.out + down.out);
 
   write("bad.csv", "2,1.5,2,0,1\n");
-  const Run bad = run("query " + path("l.tpb").string() + " --points " + path("bad.csv").string());
+  const CliRun bad = run("query " + path("l.tpb").string() + " --points " + path("bad.csv").string());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("bad.csv:1"), std::string::npos) << bad.err;
 }
@@ -220,8 +231,8 @@ TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
 TEST_F(Cli, SampleLitRoomBrighterThanDarkRoom) {
   ASSERT_EQ(run("bake " + sample() + " --samples 64 -o " + path("s.tpb").string()).code, 0);
   // Probe heights 1.5 m, facing up; room A is x in [0,4], room B x in [4.2,8.2], z in [0,4].
-  const Run a = run("query " + path("s.tpb").string() + " 2 1.5 2 0 1 0");
-  const Run b = run("query " + path("s.tpb").string() + " 7 1.5 2 0 1 0");
+  const CliRun a = run("query " + path("s.tpb").string() + " 2 1.5 2 0 1 0");
+  const CliRun b = run("query " + path("s.tpb").string() + " 7 1.5 2 0 1 0");
   ASSERT_EQ(a.code, 0) << a.err;
   float ar, ag, ab, br, bg, bb;
   ASSERT_EQ(std::sscanf(a.out.c_str(), "%f,%f,%f", &ar, &ag, &ab), 3);

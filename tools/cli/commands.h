@@ -13,6 +13,7 @@ int cmdInspect(int argc, char** argv);
 int cmdQuery(int argc, char** argv);
 int cmdRender(int argc, char** argv);
 int cmdEval(int argc, char** argv);
+int cmdDiff(int argc, char** argv);
 
 // Writes a JSON report atomically (2-space indent, trailing newline); throws on failure.
 void writeJsonReport(const std::string& path, const nlohmann::json& report);

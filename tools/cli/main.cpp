@@ -23,6 +23,7 @@ constexpr Command kCommands[] = {
     {"query", tetraprobe::cli::cmdQuery, "irradiance at points, from the level file (CPU runtime)"},
     {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},
     {"eval", tetraprobe::cli::cmdEval, "measure lookup error against path-traced ground truth"},
+    {"diff", tetraprobe::cli::cmdDiff, "compare two images for visual regression (exit 1 when they differ)"},
 };
 
 void printUsage(std::FILE* out) {
@@ -63,7 +64,8 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::fprintf(stderr, "tetraprobe: error: unknown command '%s'\n", name.c_str());
-  printUsage(stderr);
+  std::string names;
+  for (const auto& c : kCommands) names += std::string(names.empty() ? "" : ", ") + c.name;
+  std::fprintf(stderr, "tetraprobe: error: unknown command '%s' (commands: %s)\n", name.c_str(), names.c_str());
   return 2;
 }
