@@ -54,12 +54,14 @@ struct Candidate {
   std::array<OcclusionPlane, 3> planes{};
   std::array<uint8_t, kShadowMapBlockBytes> texels{};
   uint64_t agreeing = 0, leaking = 0;
+  uint64_t surfaceAgreeing = 0;  // of the answers for surface samples
 };
 
 struct TetResult {
   Candidate chosen;
   bool hasGeometry = false;
   uint64_t answers = 0;
+  uint64_t surfaceAnswers = 0;
   uint64_t rays = 0;
 };
 
@@ -181,7 +183,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
 }
 
 void score(Candidate& c, const std::vector<Sample>& samples, const Tet& tet) {
-  c.agreeing = c.leaking = 0;
+  c.agreeing = c.leaking = c.surfaceAgreeing = 0;
   const OcclusionPlane* planes = c.planes.data();
   const uint8_t* texels = c.texels.data();
   for (const Sample& s : samples) {
@@ -189,6 +191,8 @@ void score(Candidate& c, const std::vector<Sample>& samples, const Tet& tet) {
     for (int i = 0; i < 4; ++i) {
       const bool stored = vis[i] > 0.5f, truth = (s.visible >> i & 1u) != 0;
       if (stored == truth) ++c.agreeing;
+      if (stored == truth && (s.normal.x != 0.0f || s.normal.y != 0.0f || s.normal.z != 0.0f))
+        ++c.surfaceAgreeing;
       if (stored && !truth) ++c.leaking;
     }
   }
@@ -293,6 +297,8 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
   r.hasGeometry = true;
   const std::vector<Sample> samples = makeSamples(ctx, frame, tet, polys, r.rays);
   r.answers = 4 * uint64_t(samples.size());
+  for (const Sample& s : samples)
+    if (s.normal != glm::vec3(0.0f)) r.surfaceAnswers += 4;
   const double need = ctx.options.minAgreement * double(r.answers);
   const OcclusionMode mode = ctx.options.mode;
 
@@ -417,6 +423,9 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
       st.answers += r.answers;
       st.agreeing += r.chosen.agreeing;
       st.leaking += r.chosen.leaking;
+      st.surfaceAnswers += r.surfaceAnswers;
+      st.surfaceAgreeing += r.chosen.surfaceAgreeing;
+      if (double(r.chosen.agreeing) < options.minAgreement * double(r.answers)) ++st.belowMinAgreement;
     }
     const TetOcclusion& rec = r.chosen.rec;
     if (rec.kind() == kOcclusionPlanes) {
@@ -445,6 +454,7 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
   st.planes = out.planes.size();
   st.bytes = out.bytes();
   st.agreement = st.answers > 0 ? double(st.agreeing) / double(st.answers) : 1.0;
+  st.surfaceAgreement = st.surfaceAnswers > 0 ? double(st.surfaceAgreeing) / double(st.surfaceAnswers) : 1.0;
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = st;
   return out;

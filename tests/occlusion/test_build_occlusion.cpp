@@ -29,10 +29,12 @@ void printStats(const char* name, const OcclusionStats& s) {
   std::printf(
       "[%s] tets %zu, with geometry %zu: none %zu, planes %zu (1:%zu 2:%zu 3:%zu), shadow maps %zu; %zu "
       "bytes; "
-      "agreement %.4f (%llu answers, %llu leaking); %llu rays, %.3f s\n",
+      "agreement %.4f (surface %.4f; %llu answers, %llu leaking; %zu tets below minAgreement); %llu rays, "
+      "%.3f s\n",
       name, s.tets, s.tetsWithGeometry, s.none, s.planeTets, s.planeTetsByCount[1], s.planeTetsByCount[2],
-      s.planeTetsByCount[3], s.shadowMapTets, s.bytes, s.agreement, (unsigned long long)s.answers,
-      (unsigned long long)s.leaking, (unsigned long long)s.rays, s.seconds);
+      s.planeTetsByCount[3], s.shadowMapTets, s.bytes, s.agreement, s.surfaceAgreement,
+      (unsigned long long)s.answers, (unsigned long long)s.leaking, s.belowMinAgreement,
+      (unsigned long long)s.rays, s.seconds);
 }
 
 // Visibility of the single tet's probes 0..3 (by probe index, not tet slot) from x with normal n.
@@ -333,7 +335,8 @@ TEST(Occlusion, RejectsBadOptions) {
 }
 
 // Figures on a real level (printed; run with TETRAPROBE_OCCLUSION_SCENE=1, or =<scene path>): veach_ajar,
-// probes on a 1 m grid over the scene bounds without those inside geometry.
+// probes on a 1 m grid over the scene bounds (TETRAPROBE_OCCLUSION_SPACING overrides) without those inside
+// geometry.
 TEST(OcclusionScene, VeachAjarFigures) {
   const char* env = std::getenv("TETRAPROBE_OCCLUSION_SCENE");
   if (env == nullptr || *env == 0) GTEST_SKIP() << "set TETRAPROBE_OCCLUSION_SCENE=1 (or to a scene path)";
@@ -344,7 +347,9 @@ TEST(OcclusionScene, VeachAjarFigures) {
   const SceneTracer tracer(scene);
   glm::vec3 lo, hi;
   sceneBounds(scene, lo, hi);
-  const std::vector<glm::dvec3> grid = placeGridProbes(glm::dvec3(lo), glm::dvec3(hi), 1.0);
+  const char* spacing = std::getenv("TETRAPROBE_OCCLUSION_SPACING");  // metres, default 1
+  const std::vector<glm::dvec3> grid =
+      placeGridProbes(glm::dvec3(lo), glm::dvec3(hi), spacing ? std::atof(spacing) : 1.0);
   const std::vector<uint8_t> inside = probesInsideGeometry(tracer, grid);
   std::vector<glm::dvec3> probes;
   for (size_t i = 0; i < grid.size(); ++i)

@@ -42,13 +42,17 @@ struct OcclusionStats {
   size_t planeTets = 0;                       // tets storing planes
   size_t planeTetsByCount[4] = {0, 0, 0, 0};  // [1..3]: tets with that many planes
   size_t shadowMapTets = 0;
-  size_t planes = 0;       // OcclusionPlane records
-  size_t bytes = 0;        // LevelOcclusion::bytes() of the result
-  uint64_t answers = 0;    // sampled (point, probe) visibility answers checked, over tets with geometry
-  uint64_t agreeing = 0;   // of those, answered like the rays by the stored data (visibility > 0.5)
-  uint64_t leaking = 0;    // of those, rays say occluded but the stored data says visible
-  uint64_t rays = 0;       // rays traced
-  double agreement = 1.0;  // agreeing / answers (1 when nothing was checked)
+  size_t planes = 0;             // OcclusionPlane records
+  size_t bytes = 0;              // LevelOcclusion::bytes() of the result
+  size_t belowMinAgreement = 0;  // tets with geometry whose stored data misses options.minAgreement
+  uint64_t answers = 0;          // sampled (point, probe) visibility answers checked, over tets with geometry
+  uint64_t agreeing = 0;         // of those, answered like the rays by the stored data (visibility > 0.5)
+  uint64_t leaking = 0;          // of those, rays say occluded but the stored data says visible
+  uint64_t rays = 0;             // rays traced
+  uint64_t surfaceAnswers = 0;   // the part of `answers` asked at points on the geometry (normal-biased)
+  uint64_t surfaceAgreeing = 0;  // of those, answered like the rays
+  double agreement = 1.0;        // agreeing / answers (1 when nothing was checked)
+  double surfaceAgreement = 1.0;  // surfaceAgreeing / surfaceAnswers (1 when nothing was checked)
   double seconds = 0.0;
 };
 
