@@ -12,14 +12,16 @@
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
-//   face (neighbour -1) ends it outside the hull: weights clamped to >= 0 and renormalized. A cycle answers
+//   face (neighbour -1; only when the point is beyond the face's plane) continues across the outer cells
+//   (runtime/outer_cells.h) to the one whose extruded hull triangle holds the point: a continuous answer
+//   outside the hull that does not depend on the hint (loc.outerCell names the cell). A cycle answers
 //   with the visited tet holding the point best, if within TETRAPROBE_CYCLE_ACCEPT_EPS. Define
 //   TETRAPROBE_NO_SCAN_FALLBACK to skip the O(tets) scan (the answer is then the walk's best tet, clamped).
 //   An empty level gives tet -1 and E = 0.
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
-//   rounding); outside, a tie float cannot resolve can send the two walks out through different hull faces.
-// - Bindings: the three read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
-//   TETRAPROBE_BINDING + 0, 1, 2 (defaults 0 and 0,1,2; define the macros before including to move them).
+//   rounding), outside too (the outer cells' answer does not depend on the hull face the walk leaves by).
+// - Bindings: the four read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
+//   TETRAPROBE_BINDING + 0..3 (defaults 0 and 0..3; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
 //   (runtime/vulkan_upload.h).
 // - Including: the shader that includes this file needs `#extension GL_GOOGLE_include_directive : require`
@@ -41,10 +43,28 @@
 #define TETRAPROBE_MAX_HINT_STEPS 256
 #endif
 
+// Outer cells (runtime/src/outer_cells.cpp, query.cpp: kMaxOuterSteps; the root solver's thresholds in
+// float: a term below TETRAPROBE_OUTER_NEGLIGIBLE of the others is dropped, roots within
+// TETRAPROBE_OUTER_ZERO_ROOT * scale below 0 count as 0, none beyond TETRAPROBE_OUTER_MAX_T * scale).
+#ifndef TETRAPROBE_MAX_OUTER_STEPS
+#define TETRAPROBE_MAX_OUTER_STEPS 1024
+#endif
+#ifndef TETRAPROBE_OUTER_NEGLIGIBLE
+#define TETRAPROBE_OUTER_NEGLIGIBLE 1e-6
+#endif
+#ifndef TETRAPROBE_OUTER_ZERO_ROOT
+#define TETRAPROBE_OUTER_ZERO_ROOT 1e-6
+#endif
+#ifndef TETRAPROBE_OUTER_MAX_T
+#define TETRAPROBE_OUTER_MAX_T 1e4
+#endif
+
 struct TetraprobeLocation {
-  int tet;       // containing tet, or the hull tet the answer was clamped in; -1 for an empty level
-  vec4 weights;  // weights of tetraprobeTets[tet].v[0..3]: non-negative, sum to 1
-  bool inside;   // the point lies in the tet (no weight below -TETRAPROBE_INSIDE_EPS)
+  int tet;        // containing tet, or the outer cell's hull tet; -1 for an empty level
+  vec4 weights;   // weights of tetraprobeTets[tet].v[0..3]: non-negative, sum to 1
+  bool inside;    // the point lies in the tet (no weight below -TETRAPROBE_INSIDE_EPS)
+  int outerCell;  // outside the hull: the outer cell holding the point (weights: its triangle's, on the
+                  // hull tet's probes, 0 on the fourth); -1 inside
 };
 
 // Raw barycentric weights of local point p in tet t (may be negative outside): the row formula of
@@ -75,6 +95,7 @@ TetraprobeLocation tetraprobeFinish(int t, vec4 w, bool inside) {
   TetraprobeLocation loc;
   loc.tet = t;
   loc.inside = inside;
+  loc.outerCell = -1;
   if (!(s > 0.0) || isinf(s)) {
     loc.weights = vec4(0.25);
     loc.inside = false;
@@ -133,17 +154,237 @@ TetraprobeLocation tetraprobeScanAll(vec3 x) {
   return tetraprobeFinish(best, bestW, bestMin >= -TETRAPROBE_INSIDE_EPS);
 }
 
+// --- outer cells (runtime/outer_cells.h): the answer outside the hull ---------------------------------
+
+// The outer cell on face f of hull tet t (binary search over the (tet, face) order), or -1.
+int tetraprobeFindOuterCell(int t, int f) {
+  int lo = 0, hi = tetraprobeOuterCellCount;
+  while (lo < hi) {
+    int mid = lo + (hi - lo) / 2;
+    ivec2 key = ivec2(tetraprobeOuterCells[mid].v.w, tetraprobeOuterCells[mid].link.w);
+    if (key.x < t || (key.x == t && key.y < f))
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < tetraprobeOuterCellCount && tetraprobeOuterCells[lo].v.w == t &&
+                 tetraprobeOuterCells[lo].link.w == f
+             ? lo
+             : -1;
+}
+
+// x strictly beyond the plane of cell k's hull triangle (outward winding).
+bool tetraprobeBeyondHullFace(int k, vec3 x) {
+  vec3 p0 = tetraprobeOuterCells[k].p[0].xyz, p1 = tetraprobeOuterCells[k].p[1].xyz;
+  vec3 p2 = tetraprobeOuterCells[k].p[2].xyz;
+  return dot(cross(p1 - p0, p2 - p0), x - p0) > 0.0;
+}
+
+float tetraprobeHorner(vec4 c, float t) {
+  return ((c.w * t + c.z) * t + c.y) * t + c.x;
+}
+
+// Real roots of a t^2 + b t + c (a != 0) without cancellation, sorted; false when there are none.
+bool tetraprobeQuadraticRoots(float a, float b, float c, out vec2 r) {
+  r = vec2(0.0);
+  float disc = b * b - 4.0 * a * c;
+  if (disc < 0.0 || isinf(disc) || isnan(disc)) return false;
+  float q = -0.5 * (b + (b < 0.0 ? -sqrt(disc) : sqrt(disc)));
+  if (q == 0.0) return true;
+  r = vec2(q / a, c / q);
+  if (r.x > r.y) r = r.yx;
+  return true;
+}
+
+// A root in [lo, hi] (f(lo), f(hi) of opposite signs): Newton steps kept in the bracket, else bisection.
+float tetraprobeRefineRoot(vec4 c, float lo, float hi) {
+  float flo = tetraprobeHorner(c, lo);
+  float t = 0.5 * (lo + hi);
+  for (int it = 0; it < 100; ++it) {
+    float f = tetraprobeHorner(c, t);
+    if (f == 0.0) return t;
+    if ((f < 0.0) == (flo < 0.0)) {
+      lo = t;
+      flo = f;
+    } else {
+      hi = t;
+    }
+    if (hi - lo <= 4.0 * 1.1920929e-7 * max(abs(lo), abs(hi))) break;
+    float df = (3.0 * c.w * t + 2.0 * c.z) * t + c.y;
+    float next = df != 0.0 ? t - f / df : lo - 1.0;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (next == t) break;
+    t = next;
+  }
+  return t;
+}
+
+float tetraprobePolish(vec4 c, float t) {
+  for (int it = 0; it < 3; ++it) {
+    float f = tetraprobeHorner(c, t), df = (3.0 * c.w * t + 2.0 * c.z) * t + c.y;
+    if (f == 0.0 || df == 0.0) break;
+    float next = t - f / df;
+    if (isnan(next) || isinf(next) || !(abs(tetraprobeHorner(c, next)) < abs(f))) break;
+    t = next;
+  }
+  return t;
+}
+
+// smallestNonNegativeRoot (outer_cells.h) in float: c = (c0, c1, c2, c3), solved in tau = t / scale.
+bool tetraprobeSmallestRoot(vec4 coef, float scale, out float t) {
+  t = 0.0;
+  if (any(isnan(coef)) || any(isinf(coef))) return false;
+  if (!(scale > 0.0) || isinf(scale)) scale = 1.0;
+  if (coef.x == 0.0) return true;
+  vec4 c = vec4(coef.x / (scale * scale * scale), coef.y / (scale * scale), coef.z / scale, coef.w);
+  vec4 m = abs(c);
+  int degree = 3;
+  if (m.w <= TETRAPROBE_OUTER_NEGLIGIBLE * (m.x + m.y + m.z)) degree = 2;
+  if (degree == 2 && m.z <= TETRAPROBE_OUTER_NEGLIGIBLE * (m.x + m.y)) degree = 1;
+  if (degree == 1 && m.y <= TETRAPROBE_OUTER_NEGLIGIBLE * m.x) degree = 0;
+  float tau = -1.0;
+  if (degree == 1) {
+    tau = tetraprobePolish(c, -c.x / c.y);
+  } else if (degree == 2) {
+    vec2 r;
+    if (tetraprobeQuadraticRoots(c.z, c.y, c.x, r)) {
+      float r0 = tetraprobePolish(c, r.x), r1 = tetraprobePolish(c, r.y);
+      tau = r0 >= -TETRAPROBE_OUTER_ZERO_ROOT ? r0 : r1;
+    }
+  } else if (degree == 3) {
+    if ((tetraprobeHorner(c, -TETRAPROBE_OUTER_ZERO_ROOT) < 0.0) != (c.x < 0.0)) {
+      tau = 0.0;
+    } else {
+      float knots[4];
+      int k = 0;
+      knots[k++] = 0.0;
+      vec2 crit;
+      if (tetraprobeQuadraticRoots(3.0 * c.w, 2.0 * c.z, c.y, crit)) {
+        if (crit.x > knots[k - 1] && crit.x < TETRAPROBE_OUTER_MAX_T) knots[k++] = crit.x;
+        if (crit.y > knots[k - 1] && crit.y < TETRAPROBE_OUTER_MAX_T) knots[k++] = crit.y;
+      }
+      knots[k++] = TETRAPROBE_OUTER_MAX_T;
+      float flo = c.x;
+      for (int i = 0; i + 1 < k; ++i) {
+        float lo = knots[i], hi = knots[i + 1], fhi = tetraprobeHorner(c, hi);
+        if (flo == 0.0) {
+          tau = lo;
+          break;
+        }
+        if ((flo < 0.0) != (fhi < 0.0)) {
+          tau = tetraprobeRefineRoot(c, lo, hi);
+          break;
+        }
+        flo = fhi;
+      }
+    }
+  }
+  if (!(tau >= -TETRAPROBE_OUTER_ZERO_ROOT) || !(tau <= TETRAPROBE_OUTER_MAX_T)) return false;
+  t = max(tau, 0.0) * scale;
+  return true;
+}
+
+// outerCellWeights (outer_cells.h): the extrusion t and raw barycentrics of x in cell k (xyz, for v.xyz);
+// `valid` false when no root t >= 0 exists (b is then the projection's, to steer a walk).
+vec3 tetraprobeOuterWeights(int k, vec3 x, out bool valid) {
+  vec3 p0 = tetraprobeOuterCells[k].p[0].xyz, p1 = tetraprobeOuterCells[k].p[1].xyz;
+  vec3 p2 = tetraprobeOuterCells[k].p[2].xyz;
+  vec3 n0 = tetraprobeOuterCells[k].n[0].xyz, n1 = tetraprobeOuterCells[k].n[1].xyz;
+  vec3 n2 = tetraprobeOuterCells[k].n[2].xyz;
+  precise vec3 a = p0 - p2, ad = n0 - n2, b = p1 - p2, bd = n1 - n2, y = x - p2;
+  precise vec3 axb = cross(a, b), mixed = cross(a, bd) + cross(ad, b), adxbd = cross(ad, bd);
+  precise vec4 c = vec4(dot(axb, y), dot(mixed, y) - dot(axb, n2), dot(adxbd, y) - dot(mixed, n2),
+                        -dot(adxbd, n2));
+  float edge = max(max(length(a), length(b)), length(p0 - p1));
+  float t;
+  valid = tetraprobeSmallestRoot(c, length(y) + edge, t);
+  if (!valid) t = 0.0;
+  precise vec3 q0 = p0 + t * n0, q1 = p1 + t * n1, q2 = p2 + t * n2;
+  precise vec3 e1 = q0 - q2, e2 = q1 - q2, yq = x - q2, nrm = cross(e1, e2);
+  float nn = dot(nrm, nrm);
+  if (!(nn > 0.0) || isinf(nn)) {
+    valid = false;
+    return vec3(1.0 / 3.0);
+  }
+  precise float b0 = dot(cross(yq, e2), nrm) / nn, b1 = dot(cross(e1, yq), nrm) / nn;
+  return vec3(b0, b1, 1.0 - b0 - b1);
+}
+
+// Cell k's answer: its triangle weights (negatives clamped, renormalized) on the hull tet's probes.
+TetraprobeLocation tetraprobeFinishOuter(int k, vec3 b) {
+  int t = tetraprobeOuterCells[k].v.w;
+  ivec4 tv = tetraprobeTets[t].v;
+  vec4 w = vec4(0.0);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (tv[j] == tetraprobeOuterCells[k].v[i]) w[j] = b[i];
+  TetraprobeLocation loc = tetraprobeFinish(t, w, false);
+  loc.inside = false;
+  loc.outerCell = k;
+  return loc;
+}
+
+// Every outer cell with a root: the one whose smallest barycentric is largest (ties: lowest index).
+bool tetraprobeOuterScan(vec3 x, out TetraprobeLocation loc) {
+  int best = -1;
+  float bestMin = 0.0;
+  vec3 bestB = vec3(0.0);
+  for (int k = 0; k < tetraprobeOuterCellCount; ++k) {
+    bool valid;
+    vec3 b = tetraprobeOuterWeights(k, x, valid);
+    float m = min(min(b.x, b.y), b.z);
+    if (valid && (best < 0 || m > bestMin)) {
+      best = k;
+      bestMin = m;
+      bestB = b;
+    }
+  }
+  if (best >= 0) loc = tetraprobeFinishOuter(best, bestB);
+  return best >= 0;
+}
+
+// ProbeQuery::outerLocate: walk the outer cells from `cur` across the edge opposite the most negative
+// barycentric to the cell whose extruded triangle holds x; a cycle, a missing link or the bound ends in the
+// scan (skipped with TETRAPROBE_NO_SCAN_FALLBACK: `loc` is kept).
+void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
+  int saved = cur;
+  int power = 1, lam = 0;
+  for (int step = 0; step < TETRAPROBE_MAX_OUTER_STEPS && cur >= 0; ++step) {
+    bool valid;
+    vec3 b = tetraprobeOuterWeights(cur, x, valid);
+    int m = b.y < b.x ? 1 : 0;
+    if (b.z < b[m]) m = 2;
+    if (valid && b[m] >= -TETRAPROBE_INSIDE_EPS) {
+      loc = tetraprobeFinishOuter(cur, b);
+      return;
+    }
+    cur = tetraprobeOuterCells[cur].link[m];
+    if (cur == saved) break;
+    if (++lam == power) {
+      saved = cur;
+      power *= 2;
+      lam = 0;
+    }
+  }
+#ifndef TETRAPROBE_NO_SCAN_FALLBACK
+  TetraprobeLocation scanned;
+  if (tetraprobeOuterScan(x, scanned)) loc = scanned;
+#endif
+}
+
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
 // leave sliver faces' planes slightly apart) without any visited tet holding x within
 // TETRAPROBE_CYCLE_ACCEPT_EPS; a cycle otherwise answers with the visited tet holding x best. On false, `loc`
 // is that best visited tet, clamped (used only with TETRAPROBE_NO_SCAN_FALLBACK).
-bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc) {
+// When the walk leaves through a hull face, exitFace is that face (the point is beyond its plane).
+bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, out int exitFace) {
+  exitFace = -1;
   int saved = cur;  // Brent's cycle detection: a checkpoint moved at powers of two
   int power = 1, lam = 0;
   int best = -1;
   float bestMin = 0.0;
   vec4 bestW = vec4(0.0);
-  loc = TetraprobeLocation(-1, vec4(0.0), false);
+  loc = TetraprobeLocation(-1, vec4(0.0), false, -1);
   for (int step = 0; step < maxSteps; ++step) {
     vec4 w = tetraprobeWeights(cur, x);
     int m = tetraprobeMinIndex(w);
@@ -160,9 +401,24 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc) {
       loc = tetraprobeFinish(cur, w, true);
       return true;
     }
-    if (next < 0) {  // left through a hull face: outside the hull
-      loc = tetraprobeFinish(cur, w, false);
-      return true;
+    if (next < 0) {
+      // A hull face: outside the hull if x is beyond its plane (from the probe positions; the rows cannot
+      // tell within their rounding), else step across the most negative interior face, or stop here.
+      int cell = tetraprobeFindOuterCell(cur, m);
+      if (cell < 0 || tetraprobeBeyondHullFace(cell, x)) {
+        loc = tetraprobeFinish(cur, w, false);
+        exitFace = m;
+        return true;
+      }
+      int mi = -1;
+      for (int i = 0; i < 4; ++i)
+        if (tetraprobeTets[cur].n[i] >= 0 && (mi < 0 || w[i] < w[mi])) mi = i;
+      if (mi < 0 || w[mi] >= -TETRAPROBE_INSIDE_EPS) {
+        loc = tetraprobeFinish(cur, w, true);
+        return true;
+      }
+      next = tetraprobeTets[cur].n[mi];
+      m = mi;
     }
     if (best < 0 || w[m] > bestMin) {
       best = cur;
@@ -185,17 +441,27 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc) {
 }
 
 TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
-  if (tetraprobeTetCount <= 0) return TetraprobeLocation(-1, vec4(0.0), false);
+  if (tetraprobeTetCount <= 0) return TetraprobeLocation(-1, vec4(0.0), false, -1);
   vec3 x = tetraprobeSanitize(localPos);
   TetraprobeLocation loc;
+  int exitFace = -1;
   // A hint gets a short budget, then the start grid the full one, then the scan.
-  if (hint >= 0 && hint < tetraprobeTetCount && tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc)) return loc;
-  if (tetraprobeWalk(x, tetraprobeStartCellTet(x), tetraprobeMaxWalkSteps, loc)) return loc;
-#ifdef TETRAPROBE_NO_SCAN_FALLBACK
-  return loc;
-#else
-  return tetraprobeScanAll(x);
+  bool walked = hint >= 0 && hint < tetraprobeTetCount &&
+                tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace);
+  if (!walked) walked = tetraprobeWalk(x, tetraprobeStartCellTet(x), tetraprobeMaxWalkSteps, loc, exitFace);
+  if (!walked) {
+#ifndef TETRAPROBE_NO_SCAN_FALLBACK
+    loc = tetraprobeScanAll(x);
+    TetraprobeLocation outer;
+    if (!loc.inside && tetraprobeOuterScan(x, outer)) loc = outer;
 #endif
+    return loc;
+  }
+  if (exitFace < 0) return loc;
+  // Outside the hull: continue across the outer cells from the face the walk left through.
+  int cell = tetraprobeFindOuterCell(loc.tet, exitFace);
+  if (cell >= 0) tetraprobeOuterLocate(x, cell, loc);
+  return loc;
 }
 
 // Blends the 9 RGB coefficients of tet t's probes with weights w (probe 0 first, as shBlend does).

@@ -5,6 +5,7 @@
 //   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 80 bytes each (tetraprobe::Tet)
 //   TETRAPROBE_BINDING + 1  TetraprobeSh    27 floats per probe: coefficient-major, then r,g,b (tetraprobe::ShRgb)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
+//   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 128 bytes per cell
 // Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
 #ifndef TETRAPROBE_LAYOUT_GLSL
 #define TETRAPROBE_LAYOUT_GLSL
@@ -43,6 +44,22 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 2) readonly 
   ivec3 tetraprobeGridDims;     // offset 32
   int tetraprobeMaxWalkSteps;   // offset 44: the walk's bound (same as the CPU query's)
   int tetraprobeStartTet[];     // offset 48
+};
+
+// One outer cell (tetraprobe::GpuOuterCell): a hull triangle p[0..2] (outward winding) extruded along unit
+// vertex normals n[0..2]. v.xyz: its probes, v.w: its hull tet; link.xyz: the outer cell across the edge
+// opposite v[i] (-1 if none), link.w: the index in the tet's v of the vertex opposite the hull face. Sorted
+// by (hull tet, face).
+struct TetraprobeOuterCell {
+  vec4 p[3];   // offset 0: xyz positions, local frame, metres
+  vec4 n[3];   // offset 48: xyz unit normals
+  ivec4 v;     // offset 96
+  ivec4 link;  // offset 112; 128 bytes in all
+};
+
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly buffer TetraprobeOuterCells {
+  int tetraprobeOuterCellCount;                 // offset 0 (0: no outer cells, clamped hull-tet answers)
+  TetraprobeOuterCell tetraprobeOuterCells[];  // offset 16
 };
 
 #endif  // TETRAPROBE_LAYOUT_GLSL

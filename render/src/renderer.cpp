@@ -296,8 +296,8 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   // Level buffers, exactly as an engine would upload them.
   VulkanLevelBuffers levelBuffers;
   std::string uploadError;
-  if (uploadLevelBuffers(ctx.physicalDevice(), device, level, query.startGrid(), levelBuffers,
-                         &uploadError) != VK_SUCCESS)
+  if (uploadLevelBuffers(ctx.physicalDevice(), device, level, query.startGrid(), query.outerCells(),
+                         levelBuffers, &uploadError) != VK_SUCCESS)
     throw std::runtime_error("render: level upload failed: " + uploadError);
   cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
 

@@ -6,7 +6,13 @@
 // double-precision local point, so its only float error is the rows' own rounding. A walk is bounded
 // (kMaxWalkSteps) and checked for cycles (Brent); a cycle is answered by the best tet on it (see walk()),
 // and anything else ends in a brute-force scan, so every query terminates with a defined answer.
+//
+// Outside the hull (a walk leaving through a hull face whose plane the point is beyond, decided from the
+// probe positions in double, not the rows) the walk continues across the outer cells (outer_cells.h) to the
+// cell whose extruded hull triangle holds the point, so the outside answer is continuous and path-independent.
 #include "tetraprobe/runtime/query.h"
+
+#include "tetraprobe/runtime/outer_cells.h"
 
 #include <algorithm>
 #include <cassert>
@@ -30,6 +36,7 @@ constexpr int kMaxGridDim = 1024;         // per axis
 constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
+constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
 
 // Raw barycentric weights of local point x in tet t (may be negative outside), evaluated in double.
 inline void tetWeights(const Tet& t, const glm::dvec3& x, double w[4]) {
@@ -95,12 +102,25 @@ int32_t gridCell(const StartGrid& g, const glm::dvec3& x) {
   return c[0] + g.dims.x * (c[1] + g.dims.y * c[2]);
 }
 
+// True when local point x lies strictly beyond the plane of tet t's face opposite t.v[f] (the side away from
+// t.v[f]), from the probe positions in double.
+bool beyondHullFace(const Tet& t, const std::vector<glm::vec3>& probes, int f, const glm::dvec3& x) {
+  const glm::dvec3 p0(probes[size_t(t.v[(f + 1) & 3])]), p1(probes[size_t(t.v[(f + 2) & 3])]),
+      p2(probes[size_t(t.v[(f + 3) & 3])]), opp(probes[size_t(t.v[f])]);
+  const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+  const double sx = glm::dot(n, x - p0), so = glm::dot(n, opp - p0);
+  return (sx > 0.0 && so < 0.0) || (sx < 0.0 && so > 0.0);
+}
+
 // Walks from tet `cur` towards x, stepping across the face opposite the most negative weight. Float rows
 // (rounded independently per tet) can leave slivers' shared faces with slightly disagreeing planes: a point
 // in such a gap is claimed by no tet, and the walk cycles around it. A cycle therefore answers with the tet
 // along the walk that holds x best (largest smallest weight), if it holds it within kCycleAcceptEps;
 // otherwise (or after maxSteps) the walk returns false and the caller scans.
-bool walk(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, int maxSteps, Location& out) {
+// When the walk leaves through a hull face, `out` is the clamped hull tet and *exitFace the face's index.
+bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
+          int32_t cur, int maxSteps, Location& out, int32_t* exitFace) {
+  *exitFace = -1;
   int32_t saved = cur;  // Brent's cycle detection: compare against a checkpoint moved at powers of two
   int power = 1, lam = 0;
   int32_t best = -1;
@@ -108,8 +128,8 @@ bool walk(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, int ma
   for (int step = 0; step < maxSteps; ++step) {
     double w[4];
     tetWeights(tets[size_t(cur)], x, w);
-    const int m = minIndex(w);
-    const int32_t next = tets[size_t(cur)].n[m];
+    int m = minIndex(w);
+    int32_t next = tets[size_t(cur)].n[m];
     if (w[m] >= -kInsideEps || std::isnan(w[m])) {
       // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
       // whichever tet holds it better, so the answer does not depend on the side the walk came from.
@@ -124,9 +144,25 @@ bool walk(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, int ma
       out = finish(cur, w, true);
       return true;
     }
-    if (next < 0) {  // leaving through a hull face: the point is outside the (convex) hull
-      out = finish(cur, w, false);
-      return true;
+    if (next < 0) {
+      // Leaving through a hull face: the point is outside the (convex) hull, if it is beyond the face's
+      // plane. The float rows cannot tell within their rounding; the probe positions can (in double).
+      if (beyondHullFace(tets[size_t(cur)], probes, m, x)) {
+        out = finish(cur, w, false);
+        *exitFace = m;
+        return true;
+      }
+      // Not beyond it: step across the most negative interior face instead, or stop here when none is
+      // negative beyond the tolerance.
+      int mi = -1;
+      for (int i = 0; i < 4; ++i)
+        if (tets[size_t(cur)].n[i] >= 0 && (mi < 0 || w[i] < w[mi])) mi = i;
+      if (mi < 0 || w[mi] >= -kInsideEps) {
+        out = finish(cur, w, true);
+        return true;
+      }
+      next = tets[size_t(cur)].n[mi];
+      m = mi;
     }
     if (w[m] > bestMin) {
       best = cur;
@@ -163,6 +199,21 @@ Location scanAll(const Level& level, const glm::dvec3& x) {
     }
   }
   return finish(best, bestW, bestMin >= -kInsideEps);
+}
+
+// The answer of outer cell k: its triangle weights (tiny negatives clamped, renormalized) on the hull tet.
+Location finishOuter(const std::vector<Tet>& tets, const std::vector<OuterCell>& cells, int32_t k,
+                     const OuterWeights& ow) {
+  const OuterCell& cell = cells[size_t(k)];
+  const Tet& tet = tets[size_t(cell.tet)];
+  double w[4] = {0.0, 0.0, 0.0, 0.0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (tet.v[j] == cell.v[i]) w[j] = ow.b[i];
+  Location loc = finish(cell.tet, w, false);
+  loc.inside = false;
+  loc.outerCell = k;
+  return loc;
 }
 
 // Builds the start grid: cells of ~kProbesPerCell probes over the probe bounds; each cell names the tet
@@ -261,11 +312,59 @@ StartGrid buildStartGrid(const Level& level) {
 
 }  // namespace
 
-ProbeQuery::ProbeQuery(const Level& level) : level_(level), grid_(buildStartGrid(level)) {}
+ProbeQuery::ProbeQuery(const Level& level) : level_(level), grid_(buildStartGrid(level)) {
+  if (level.outerCells.empty() && !level.tets.empty()) ownCells_ = buildOuterCells(level.probes, level.tets);
+}
+
+// Walks the outer cells from `startCell` to the one whose extruded triangle holds x: each step crosses the
+// edge opposite the most negative barycentric. Bounded; a cycle, a missing link or the bound ends in the
+// scan.
+Location ProbeQuery::outerLocate(const glm::dvec3& x, int32_t startCell) const {
+  const std::vector<OuterCell>& cells = outerCells();
+  int32_t cur = startCell, saved = startCell;
+  int power = 1, lam = 0;
+  for (int step = 0; step < kMaxOuterSteps && cur >= 0; ++step) {
+    const OuterWeights ow = outerCellWeights(cells[size_t(cur)], level_.probes, x);
+    int m = 0;
+    for (int i = 1; i < 3; ++i)
+      if (ow.b[i] < ow.b[m]) m = i;
+    if (ow.valid && ow.b[m] >= -kInsideEps) return finishOuter(level_.tets, cells, cur, ow);
+    cur = cells[size_t(cur)].n[m];
+    if (cur == saved) break;
+    if (++lam == power) {
+      saved = cur;
+      power *= 2;
+      lam = 0;
+    }
+  }
+  return outerScan(x, scanAll(level_, x));
+}
+
+// Every outer cell with a root: the one whose smallest barycentric is largest (ties: lowest index);
+// `fallback` (the clamped best tet) when no cell reaches x.
+Location ProbeQuery::outerScan(const glm::dvec3& x, const Location& fallback) const {
+  const std::vector<OuterCell>& cells = outerCells();
+  int32_t best = -1;
+  OuterWeights bestW;
+  double bestMin = -std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < cells.size(); ++k) {
+    const OuterWeights ow = outerCellWeights(cells[k], level_.probes, x);
+    if (!ow.valid) continue;
+    const double m = std::min({ow.b[0], ow.b[1], ow.b[2]});
+    if (m > bestMin) {
+      best = int32_t(k);
+      bestMin = m;
+      bestW = ow;
+    }
+  }
+  return best >= 0 ? finishOuter(level_.tets, cells, best, bestW) : fallback;
+}
 
 Location ProbeQuery::bruteForceLocate(const glm::dvec3& world) const {
   if (level_.tets.empty()) return Location{};
-  return scanAll(level_, sanitize(world - level_.origin, grid_));
+  const glm::dvec3 x = sanitize(world - level_.origin, grid_);
+  const Location loc = scanAll(level_, x);
+  return loc.inside ? loc : outerScan(x, loc);
 }
 
 Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
@@ -275,9 +374,18 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   // A hint gets a short budget (a stale hint from an object that moved far should not cost a long walk),
   // then the start grid gets the full one, then the O(tets) scan.
   const std::vector<Tet>& tets = level_.tets;
-  if (hint >= 0 && size_t(hint) < tets.size() && walk(tets, x, hint, kMaxHintSteps, loc)) return loc;
-  if (walk(tets, x, grid_.startTet[size_t(gridCell(grid_, x))], kMaxWalkSteps, loc)) return loc;
-  return scanAll(level_, x);
+  int32_t exitFace = -1;
+  if (!(hint >= 0 && size_t(hint) < tets.size() &&
+        walk(tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace)) &&
+      !walk(tets, level_.probes, x, grid_.startTet[size_t(gridCell(grid_, x))], kMaxWalkSteps, loc,
+            &exitFace)) {
+    loc = scanAll(level_, x);
+    return loc.inside ? loc : outerScan(x, loc);
+  }
+  if (exitFace < 0) return loc;
+  // Outside the hull: continue across the outer cells from the face the walk left through.
+  const int32_t cell = findOuterCell(outerCells(), loc.tet, exitFace);
+  return cell >= 0 ? outerLocate(x, cell) : loc;
 }
 
 glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache) const {

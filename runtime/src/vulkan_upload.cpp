@@ -10,7 +10,7 @@ namespace tetraprobe {
 namespace {
 
 const char* bindingName(int i) {
-  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid"};
+  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid", "outer cells"};
   return kNames[i];
 }
 
@@ -65,8 +65,8 @@ void appendBytes(std::vector<char>& out, const T* data, size_t count) {
 }  // namespace
 
 VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
-                            const StartGrid& grid, VulkanLevelBuffers& out, std::string* error,
-                            int32_t maxWalkSteps) {
+                            const StartGrid& grid, const std::vector<OuterCell>& outerCells,
+                            VulkanLevelBuffers& out, std::string* error, int32_t maxWalkSteps) {
   out = VulkanLevelBuffers{};
   const size_t cells =
       size_t(std::max(grid.dims.x, 0)) * size_t(std::max(grid.dims.y, 0)) * size_t(std::max(grid.dims.z, 0));
@@ -99,6 +99,18 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     }
   }
 
+  const auto cellCount = int64_t(outerCells.size());
+  for (int64_t k = 0; k < cellCount; ++k) {
+    const OuterCell& c = outerCells[size_t(k)];
+    bool ok = c.tet >= 0 && c.tet < tetCount && c.face >= 0 && c.face < 4;
+    for (int i = 0; i < 3; ++i)
+      ok = ok && c.v[i] >= 0 && c.v[i] < probeCount && c.n[i] >= -1 && c.n[i] < cellCount;
+    if (!ok) {
+      if (error) *error = "outer cell " + std::to_string(k) + " has an index out of range";
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
+  }
+
   std::vector<char> data[kGpuBindingCount];
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
   appendBytes(data[kGpuBindingSh], level.sh.data(), level.sh.size());
@@ -113,6 +125,24 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   header.maxWalkSteps = maxWalkSteps;
   appendBytes(data[kGpuBindingGrid], &header, 1);
   appendBytes(data[kGpuBindingGrid], grid.startTet.data(), grid.startTet.size());
+  GpuOuterHeader outerHeader{};
+  outerHeader.count = int32_t(cellCount);
+  appendBytes(data[kGpuBindingOuterCells], &outerHeader, 1);
+  for (const OuterCell& c : outerCells) {
+    GpuOuterCell g{};
+    for (int i = 0; i < 3; ++i) {
+      const glm::vec3& p = level.probes[size_t(c.v[i])];
+      for (int a = 0; a < 3; ++a) {
+        g.p[i][a] = p[a];
+        g.n[i][a] = c.normal[i][a];
+      }
+      g.v[i] = c.v[i];
+      g.link[i] = c.n[i];
+    }
+    g.v[3] = c.tet;
+    g.link[3] = c.face;
+    appendBytes(data[kGpuBindingOuterCells], &g, 1);
+  }
 
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physicalDevice, &props);

@@ -14,10 +14,11 @@ namespace tetraprobe {
 
 // Binding TETRAPROBE_BINDING + i of set TETRAPROBE_SET (defaults: set 0, first binding 0).
 enum GpuBinding : uint32_t {
-  kGpuBindingTets = 0,  // TetraprobeTets: Tet[] (80 bytes each)
-  kGpuBindingSh = 1,    // TetraprobeSh: float[27 * probes] (ShRgb[], 108 bytes each)
-  kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
-  kGpuBindingCount = 3,
+  kGpuBindingTets = 0,        // TetraprobeTets: Tet[] (80 bytes each)
+  kGpuBindingSh = 1,          // TetraprobeSh: float[27 * probes] (ShRgb[], 108 bytes each)
+  kGpuBindingGrid = 2,        // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
+  kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
+  kGpuBindingCount = 4,
 };
 
 // The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; vec4 row[3]; }`.
@@ -48,5 +49,27 @@ static_assert(offsetof(GpuGridHeader, min) == 0 && offsetof(GpuGridHeader, tetCo
                   offsetof(GpuGridHeader, dims) == 32 && offsetof(GpuGridHeader, maxWalkSteps) == 44,
               "TetraprobeGrid header offsets (std430: vec3 aligned to 16, a scalar packs after it)");
 inline constexpr size_t kGpuGridStartTetOffset = sizeof(GpuGridHeader);
+
+// Header of the TetraprobeOuterCells buffer (16 bytes); GpuOuterCell[count] follows at offset 16.
+struct GpuOuterHeader {
+  int32_t count;  // int tetraprobeOuterCellCount
+  int32_t pad[3];
+};
+static_assert(sizeof(GpuOuterHeader) == 16, "TetraprobeOuterCells header: 16 bytes, cells at offset 16");
+
+// One outer cell as the shader reads it: OuterCell (level.h) with its three probe positions copied in, so the
+// extrusion needs no other buffer. GLSL: struct TetraprobeOuterCell { vec4 p[3]; vec4 n[3]; ivec4 v; ivec4
+// link; }.
+struct GpuOuterCell {
+  float p[3][4];    // probe positions of v[0..2] (xyz, local frame, metres; w = 0)
+  float n[3][4];    // unit vertex normals (xyz; w = 0)
+  int32_t v[4];     // v[0..2]: probe indices (outward winding); v[3]: the hull tet
+  int32_t link[4];  // link[0..2]: outer cell across the edge opposite v[i], or -1; link[3]: the tet's face
+};
+static_assert(std::is_standard_layout_v<GpuOuterCell>);
+static_assert(sizeof(GpuOuterCell) == 128 && offsetof(GpuOuterCell, n) == 48 &&
+                  offsetof(GpuOuterCell, v) == 96 && offsetof(GpuOuterCell, link) == 112,
+              "TetraprobeOuterCell: std430 array stride 128");
+inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
 
 }  // namespace tetraprobe

@@ -19,9 +19,9 @@ namespace tetraprobe {
 
 // What light the probes hold (bit flags, stored in the file).
 enum ProbeContent : uint32_t {
-  kContentEmissive = 1u << 0,     // light arriving directly from emissive surfaces
-  kContentSky = 1u << 1,          // light arriving directly from the sky
-  kContentIndirect = 1u << 2,     // light after one or more diffuse bounces
+  kContentEmissive = 1u << 0,        // light arriving directly from emissive surfaces
+  kContentSky = 1u << 1,             // light arriving directly from the sky
+  kContentIndirect = 1u << 2,        // light after one or more diffuse bounces
   kContentDirectPunctual = 1u << 3,  // light arriving directly from point, spot and directional lights
   kContentDefault = kContentEmissive | kContentSky | kContentIndirect,
   kContentAll = kContentDefault | kContentDirectPunctual,
@@ -39,6 +39,24 @@ struct alignas(16) Tet {
 };
 static_assert(sizeof(Tet) == 80, "Tet is 80 bytes in std430");
 
+// One outer cell: a hull triangle extruded along unit vertex normals, covering the space outside the hull
+// beyond it (runtime/outer_cells.h). Laid out as the GPU reads it (std430, 80 bytes; mirrored in
+// shaders/tetraprobe_layout.glsl).
+// - v[i]: the hull face's probe indices, counter-clockwise seen from outside ((P1-P0) x (P2-P0) points out).
+// - tet: the hull tet owning the face; face: the index in tet.v of the tet's vertex opposite the face
+//   (tet.n[face] == -1).
+// - n[i]: the outer cell across the hull edge opposite v[i] (edge v[i+1], v[i+2]), or -1.
+// - normal[i].xyz: unit vertex normal at v[i] (angle-weighted mean of the adjacent hull faces' outward
+//   normals; equal in every cell naming that probe); normal[i].w = 0.
+struct alignas(16) OuterCell {
+  int32_t v[3];
+  int32_t tet;
+  int32_t n[3];
+  int32_t face;
+  float normal[3][4];
+};
+static_assert(sizeof(OuterCell) == 80, "OuterCell is 80 bytes in std430");
+
 struct Level {
   uint32_t content = kContentDefault;  // ProbeContent flags
   uint32_t shOrder = 2;                // 1 or 2 (L1 probes have coefficients 4..8 zero)
@@ -46,10 +64,21 @@ struct Level {
   std::vector<glm::vec3> probes;       // probe positions, local frame, metres
   std::vector<ShRgb> sh;               // one per probe: incident radiance SH
   std::vector<Tet> tets;               // tetrahedralization of `probes` (every probe is a vertex)
-  std::string generator;               // free text: tool version and options that produced the file
+  // One per hull face, sorted by (tet, face) (buildOuterCells in outer_cells.h). Optional: when empty,
+  // ProbeQuery builds them itself on construction.
+  std::vector<OuterCell> outerCells;
+  std::string generator;  // free text: tool version and options that produced the file
 };
 
-enum class LevelStatus { kOk, kCannotOpen, kNotALevel, kUnsupportedVersion, kTruncated, kCorrupt, kWriteFailed };
+enum class LevelStatus {
+  kOk,
+  kCannotOpen,
+  kNotALevel,
+  kUnsupportedVersion,
+  kTruncated,
+  kCorrupt,
+  kWriteFailed
+};
 
 struct LevelResult {
   LevelStatus status = LevelStatus::kOk;

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include <glm/vec4.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "tetraprobe/runtime/level.h"
 
@@ -23,10 +23,15 @@ struct StartGrid {
   std::vector<int32_t> startTet;
 };
 
+// Where a point is. Inside the hull: a tet and its barycentrics. Outside: the outer cell `outerCell` (an
+// index into ProbeQuery::outerCells()) whose extruded hull triangle holds the point; `tet` is then that
+// cell's hull tet and `weights` its triangle barycentrics expressed on tet.v[0..3] (0 on the vertex opposite
+// the hull face), so every consumer can blend tet.v[] with weights[] whichever case it is.
 struct Location {
-  int32_t tet = -1;          // containing tet, or the hull tet the answer was taken from; -1 for an empty level
-  glm::vec4 weights{0.0f};   // weights of tet.v[0..3]: non-negative, sum to 1
-  bool inside = false;       // true when the point lies in the tet (within 1e-6 on each weight)
+  int32_t tet = -1;         // containing tet, or the outer cell's hull tet; -1 for an empty level
+  glm::vec4 weights{0.0f};  // weights of tet.v[0..3]: non-negative, sum to 1
+  bool inside = false;      // true when the point lies in the tet (within 1e-6 on each weight)
+  int32_t outerCell = -1;   // outside the hull: the outer cell holding the point; -1 inside (or no cell)
 };
 
 class ProbeQuery {
@@ -35,14 +40,15 @@ class ProbeQuery {
   explicit ProbeQuery(const Level& level);
 
   // Locates a world-space point. `hint` is a tet to start from (for example the tet of the same object
-  // last frame), or -1. Outside the probe hull the answer is defined and finite: the nearest hull tet with
-  // its weights clamped to be non-negative and renormalized.
+  // last frame), or -1. Outside the probe hull the walk continues across the outer cells (outer_cells.h) to
+  // the one whose extruded triangle holds the point: a continuous answer that does not depend on the hint or
+  // the walk's path (up to 1e-6 in the weights where two cells share the point).
   Location locate(const glm::dvec3& world, int32_t hint = -1) const;
 
   // Reference answer for tests and the walk's fallback: scans every tet (O(tets)) and returns the one whose
-  // smallest weight is largest (ties: lowest index), clamped and renormalized as locate() does. Inside the
-  // hull it agrees with locate() (up to which of two tets sharing a face is named for a point on it); the
-  // hint never changes locate()'s answer inside the hull, while outside it may pick another hull tet.
+  // smallest weight is largest (ties: lowest index), clamped and renormalized as locate() does; when that
+  // tet does not hold the point, scans every outer cell the same way. Agrees with locate() (up to which of
+  // two tets or cells sharing a point is named).
   Location bruteForceLocate(const glm::dvec3& world) const;
 
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
@@ -55,10 +61,18 @@ class ProbeQuery {
 
   const Level& level() const { return level_; }
   const StartGrid& startGrid() const { return grid_; }
+  // The level's outer cells, or the ones built on construction when the level carries none.
+  const std::vector<OuterCell>& outerCells() const {
+    return ownCells_.empty() ? level_.outerCells : ownCells_;
+  }
 
  private:
+  Location outerLocate(const glm::dvec3& x, int32_t startCell) const;
+  Location outerScan(const glm::dvec3& x, const Location& fallback) const;
+
   const Level& level_;
   StartGrid grid_;
+  std::vector<OuterCell> ownCells_;
 };
 
 }  // namespace tetraprobe
