@@ -1,12 +1,16 @@
 // Automatic probe placement. Build side.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 namespace tetraprobe {
+
+struct Scene;
 
 // A regular grid at `spacing` metres covering [lo, hi] (inclusive, centred so the margins are equal), in
 // x-fastest order: floor(extent / spacing) + 1 points per axis (an extent that is an exact multiple of the
@@ -19,5 +23,103 @@ std::vector<glm::dvec3> placeGridProbes(const glm::dvec3& lo, const glm::dvec3& 
 // Reads user probes from a CSV file: one `x,y,z` a line (world metres); blank lines and lines starting with
 // '#' are skipped. Throws InputError naming the file and line for anything else (non-numbers, NaN, Inf).
 std::vector<glm::dvec3> readProbeCsv(const std::string& path);
+
+// ---- Adaptive voxel placement (Valient 2014: "a probe in every empty voxel next to geometry") ----------
+
+enum class ProbeKind : uint8_t {
+  kUser = 0,     // from --probes: never moved, never merged away
+  kSurface = 1,  // empty finest voxel 26-adjacent to a voxel holding geometry
+  kVolume = 2,   // empty finest voxel inside a fine volume (Scene::fineVolumes), not next to geometry
+  kOpen = 3,     // centre of an empty coarser octree cell (open space, graded up to maxSpacing)
+  kFiller = 4,   // filler: open-space lattice at fillerSpacing, or added where tets were slivers
+};
+const char* probeKindName(ProbeKind kind);
+
+struct PlacedProbes {
+  std::vector<glm::dvec3> positions;  // world metres
+  std::vector<ProbeKind> kinds;       // one per position
+  std::vector<double> spacing;        // local spacing (edge of the voxel the probe came from), metres
+  size_t size() const { return positions.size(); }
+  void add(const glm::dvec3& p, ProbeKind k, double s) {
+    positions.push_back(p);
+    kinds.push_back(k);
+    spacing.push_back(s);
+  }
+  size_t count(ProbeKind k) const;
+};
+
+struct VoxelPlacementOptions {
+  double spacing = 1.0;        // finest voxel edge, metres: near geometry and inside fine volumes
+  double maxSpacing = 10.0;    // coarsest cell edge allowed (levels double the edge: spacing * 2^L <= this)
+  double fillerSpacing = 4.0;  // open-space filler lattice, metres (0 = none)
+  size_t maxProbes = 5'000'000;
+  int threads = 0;  // voxelization threads, 0 = all cores (never changes the output)
+};
+
+// The octree, flattened into levels L = 0..Lmax with cell edge h_L = spacing * 2^L, Lmax the largest L with
+// h_L <= maxSpacing (at least 0). The domain is the scene bounds grown by one spacing, cells aligned to its
+// min corner. A level-0 voxel "holds geometry" when a triangle overlaps the closed voxel box (exact SAT,
+// Akenine-Moller 2001). A level-L cell (L >= 1) is split when it holds geometry, is within one level-L cell
+// (26-neighbourhood) of a cell that does, or overlaps a fine volume. Probes go at the centres of:
+//   - level-0 empty voxels (children of split level-1 cells) that touch a geometry voxel: kSurface;
+//   - level-0 empty voxels inside a fine volume that are not next to geometry: kVolume;
+//   - empty leaf cells of level L >= 1 (unsplit children of split cells, or unsplit top cells): kOpen;
+// Probes whose centre lies outside the scene bounds grown by one spacing are dropped (top cells are padded
+// to whole cells). Then the filler lattice (kFiller): points of a fillerSpacing lattice over the domain with
+// no other probe within fillerSpacing / 2 and not in a geometry voxel. Deterministic (sorted sparse sets, no
+// hashing order). Cost O(triangle-voxel overlaps + probes). Throws InputError for a scene without triangles,
+// spacing <= 0 or non-finite, maxSpacing < spacing, negative fillerSpacing, a domain above 2^20 voxels per
+// axis, or more than maxProbes probes.
+PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& options);
+
+// Triangle / axis-aligned box overlap (separating axis test). Closed box [lo, hi]. Exposed for tests.
+bool triangleBoxOverlap(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& lo,
+                        const glm::dvec3& hi);
+
+// ---- Rejection / push-out ---------------------------------------------------------------------------
+
+// What rays from a point see (computed by the caller, e.g. with the bake's SceneTracer; tetra links no
+// ray tracer). All distances in metres.
+struct Clearance {
+  bool inside = false;     // more than 25 % of the rays hit back faces (Unity APV rule)
+  glm::dvec3 escape{0.0};  // unit mean direction of rays that escaped or hit a front face farther than
+                           // the query's reach; zero when none did
+  double nearest = 1e300;  // distance of the closest hit over all rays (upper bound of the distance to
+                           // the nearest surface)
+  glm::dvec3 away{0.0};    // unit direction pointing away from that closest surface (its front normal
+                           // for a front hit), zero when nothing was hit
+};
+// The inside rule both the pipeline and the tests apply to `rays` uniformly distributed rays of which `hits`
+// hit something and `backHits` hit a back face: inside when backHits > 25 % of the rays (Unity APV), or when
+// at least 1/16 of the rays hit and 90 % of those hits are back faces (a probe outside a closed level sees
+// only the backs of its walls, over less than a quarter of the sphere at corners).
+bool insideByRays(int rays, int hits, int backHits);
+
+// Batch query: one Clearance per point, rays reaching `reach` metres (hits beyond count as escapes).
+// Must be a pure function of its inputs (it may run threads).
+using ClearanceQuery = std::function<std::vector<Clearance>(const std::vector<glm::dvec3>& points,
+                                                            const std::vector<double>& reach)>;
+
+struct PushOutStats {
+  size_t rejected = 0;  // inside geometry and not rescued, or pushed into geometry
+  size_t pushed = 0;    // moved (out of geometry, or off a surface)
+};
+
+// The rule, for every probe that is not kUser (s = its local spacing):
+//  1. inside -> move by s/2 along `escape` (reject when escape is zero); re-test: still inside or closer
+//     than 0.05 s to a surface -> reject.
+//  2. not inside but nearest < 0.05 s -> move along `away` to 0.05 s off that surface; re-test: inside ->
+//     reject.
+// User probes are kept untouched whatever they see. Removes rejected probes (order kept).
+PushOutStats pushOutProbes(PlacedProbes& probes, const ClearanceQuery& query);
+
+// ---- Merging ----------------------------------------------------------------------------------------
+
+// Drops near-coincident probes: two probes i, j closer than tolerance * max(s_i, s_j) (s = local spacing)
+// conflict, and the one later in priority order (kUser, kSurface, kVolume, kOpen, kFiller; then input
+// order) is dropped. User probes are never dropped (user-user pairs are left to the tetrahedralizer, which
+// rejects exact duplicates). Hash grids per distinct tolerance; O(n) expected. Deterministic. Returns the
+// number dropped.
+size_t mergeProbes(PlacedProbes& probes, double tolerance = 0.1);
 
 }  // namespace tetraprobe

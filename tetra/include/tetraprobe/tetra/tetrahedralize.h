@@ -29,6 +29,27 @@ struct TetMesh {
 // coordinates, exact duplicates, or points that are all coplanar/collinear.
 TetMesh tetrahedralizeDelaunay(const std::vector<glm::dvec3>& points);
 
+// TetGen 1.5 backend (AGPL, build side). Stage 1: Delaunay of `points` (switches "Qn"). Stage 2, only when
+// `refine` is true: quality refinement of that mesh ("rYq<radiusEdge>/<minDihedralDeg>Qn", hull faces kept
+// unsplit, at most `maxSteiner` new points, -1 = no limit, 0 = none: TetGen then only improves the mesh by
+// flips, and the result is a valid but no longer Delaunay mesh), whose Steiner points are appended after the
+// input points. (TetGen's `q` on a bare point set returns an empty mesh, hence the two stages.) The mesh is
+// in the same convention as tetrahedralizeDelaunay() (positively oriented, canonical, Morton order,
+// neighbours) over `points` + steiner. Deterministic. Throws InputError for the same degenerate inputs as
+// tetrahedralizeDelaunay() (same messages, prefix "tetrahedralize (tetgen)"); TetGen's own failures (its int
+// error codes; TETLIBRARY is defined so it never calls exit()) become InputError naming the code.
+struct TetGenOptions {
+  bool refine = false;
+  double radiusEdge = 2.0;       // q: maximum radius-edge ratio
+  double minDihedralDeg = 10.0;  // q: minimum dihedral angle, degrees
+  int maxSteiner = -1;
+};
+struct TetGenResult {
+  TetMesh mesh;
+  std::vector<glm::dvec3> steiner;  // added points; mesh index points.size() + i is steiner[i]
+};
+TetGenResult tetrahedralizeTetGen(const std::vector<glm::dvec3>& points, const TetGenOptions& options = {});
+
 // Runtime tet records (tetraprobe::Tet, barycentric rows computed in double) with positions taken relative
 // to `origin`. One record per mesh tet, same order.
 std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const TetMesh& mesh,
