@@ -28,6 +28,15 @@ int cmdBake(int argc, char** argv) {
         "time); all: that too",
         "default"},
        {"--seed", "", "N", "random seed (the output is a pure function of input, options and seed)", "1"},
+       {"--dering", "", "none|auto|S",
+        "per-probe window on SH bands 1-2 so irradiance is never negative: auto = smallest strength per "
+        "probe, S = this strength in [0, 2] for all, none = keep the SH as projected",
+        "auto"},
+       {"--sh-order", "", "1|2", "SH order of the probes (1: coefficients 4..8 zero)", "2"},
+       {"--import-sh", "", "FILE.csv",
+        "take probe positions and SH from another baker (x,y,z + 27 coefficients a line, see "
+        "bake/include/tetraprobe/bake/sh_csv.h) instead of placing and path tracing",
+        ""},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
@@ -39,6 +48,23 @@ int cmdBake(int argc, char** argv) {
   opt.spacing = args.number("--spacing");
   if (!(opt.spacing > 0.0)) throw UsageError("--spacing must be positive");
   opt.probesCsv = args.str("--probes");
+  opt.importShCsv = args.str("--import-sh");
+  if (!opt.probesCsv.empty() && !opt.importShCsv.empty())
+    throw UsageError("--probes and --import-sh both give the probes; use one");
+  const std::string shOrder = args.str("--sh-order");
+  if (shOrder != "1" && shOrder != "2") throw UsageError("--sh-order must be 1 or 2, not '" + shOrder + "'");
+  opt.bake.shOrder = shOrder == "1" ? 1 : 2;
+  const std::string dering = args.str("--dering");
+  if (dering == "none") {
+    opt.dering.mode = DeringMode::kNone;
+  } else if (dering == "auto") {
+    opt.dering.mode = DeringMode::kAuto;
+  } else {
+    opt.dering.mode = DeringMode::kFixed;
+    opt.dering.strength = parseNumber(dering, "--dering");
+    if (!(opt.dering.strength >= 0.0 && opt.dering.strength <= kDeringMaxStrength))
+      throw UsageError("--dering must be none, auto or a strength in [0, 2], not '" + dering + "'");
+  }
   opt.bake.bounces = args.integer("--bounces");
   opt.bake.samplesPerProbe = args.integer("--samples");
   opt.bake.threads = args.integer("--threads");
@@ -78,12 +104,21 @@ int cmdBake(int argc, char** argv) {
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
   std::printf("  scene   %zu triangles, %zu materials, %zu lights\n", scene.triangles.size(),
               scene.materials.size(), scene.lights.size());
-  if (stats.userProbes)
+  if (stats.importedProbes)
+    std::printf("  probes  %zu (imported with their SH, from %s)\n", level.probes.size(),
+                opt.importShCsv.c_str());
+  else if (stats.userProbes)
     std::printf("  probes  %zu (user, from %s)\n", level.probes.size(), opt.probesCsv.c_str());
   else
     std::printf("  probes  %zu (grid %.3g m: %zu placed, %zu inside geometry rejected)\n",
                 level.probes.size(), opt.spacing, stats.gridProbes, stats.rejectedProbes);
   std::printf("  tets    %zu\n", level.tets.size());
+  if (!stats.importedProbes)
+    std::printf("  rays    %llu (%.3g Mrays/s)\n", (unsigned long long)stats.bake.rays(),
+                stats.bake.raysPerSecond() * 1e-6);
+  std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
+              opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
+              stats.dering.minIrradianceAfter);
   std::printf("  bytes   %llu (probes %llu, SH %llu, tets %llu)\n", (unsigned long long)fileBytes,
               (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
   std::printf("  time   ");
@@ -103,12 +138,28 @@ int cmdBake(int argc, char** argv) {
                     {"samples", opt.bake.samplesPerProbe},
                     {"content", content},
                     {"seed", opt.bake.seed},
-                    {"placement", opt.probesCsv.empty() ? "grid" : "user"}};
+                    {"placement", !opt.importShCsv.empty() ? "imported"
+                                  : opt.probesCsv.empty()  ? "grid"
+                                                           : "user"},
+                    {"sh_order", opt.bake.shOrder},
+                    {"dering", dering}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},
                    {"rejected", stats.rejectedProbes}};
     j["tets"] = {{"count", level.tets.size()}};
+    j["sh"] = {{"order", opt.bake.shOrder},
+               {"deringed_probes", stats.dering.deringedProbes},
+               {"unfixable_probes", stats.dering.unfixableProbes},
+               {"max_dering_strength", stats.dering.maxStrength},
+               {"min_irradiance_before", stats.dering.minIrradianceBefore},
+               {"min_irradiance_after", stats.dering.minIrradianceAfter}};
+    j["bake"] = {{"rays", stats.bake.rays()},
+                 {"intersect_rays", stats.bake.intersectRays},
+                 {"occluded_rays", stats.bake.occludedRays},
+                 {"seconds", stats.bake.seconds},
+                 {"rays_per_s", stats.bake.raysPerSecond()},
+                 {"imported", stats.importedProbes > 0}};
     nlohmann::json timings = nlohmann::json::object();
     for (const auto& [stage, s] : stats.timings) timings[stage] = s;
     timings["total"] = total;

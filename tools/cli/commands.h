@@ -13,6 +13,9 @@ int cmdInspect(int argc, char** argv);
 int cmdQuery(int argc, char** argv);
 int cmdRender(int argc, char** argv);
 int cmdEval(int argc, char** argv);
+int cmdReference(int argc, char** argv);
+int cmdExportSh(int argc, char** argv);
+int cmdBench(int argc, char** argv);
 int cmdDiff(int argc, char** argv);
 
 // Writes a JSON report atomically (2-space indent, trailing newline); throws on failure.

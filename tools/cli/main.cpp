@@ -23,6 +23,9 @@ constexpr Command kCommands[] = {
     {"query", tetraprobe::cli::cmdQuery, "irradiance at points, from the level file (CPU runtime)"},
     {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},
     {"eval", tetraprobe::cli::cmdEval, "measure lookup error against path-traced ground truth"},
+    {"reference", tetraprobe::cli::cmdReference, "path-traced irradiance at points, to a target error"},
+    {"export-sh", tetraprobe::cli::cmdExportSh, "write a level's probes and SH as CSV (for bake --import-sh)"},
+    {"bench", tetraprobe::cli::cmdBench, "throughput against a peer in the same run (bench bake)"},
     {"diff", tetraprobe::cli::cmdDiff, "compare two images for visual regression (exit 1 when they differ)"},
 };
 

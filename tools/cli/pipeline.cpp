@@ -7,6 +7,7 @@
 
 #include <glm/common.hpp>
 
+#include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/tetra/placement.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
@@ -33,6 +34,14 @@ std::string contentName(uint32_t content) {
   return content == kContentAll ? "all" : "default";
 }
 
+std::string deringName(const DeringOptions& d) {
+  if (d.mode == DeringMode::kNone) return "none";
+  if (d.mode == DeringMode::kAuto) return "auto";
+  std::ostringstream s;
+  s << d.strength;
+  return s.str();
+}
+
 }  // namespace
 
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats) {
@@ -41,7 +50,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   timer.mark("bvh");
 
   std::vector<glm::dvec3> probes;
-  if (!options.probesCsv.empty()) {
+  ProbeShTable imported;
+  if (!options.importShCsv.empty()) {
+    if (!options.probesCsv.empty())
+      throw InputError("give either a probe CSV or an SH CSV to import, not both");
+    imported = readShCsv(options.importShCsv);
+    probes = imported.positions;
+    stats.importedProbes = stats.userProbes = probes.size();
+  } else if (!options.probesCsv.empty()) {
     probes = readProbeCsv(options.probesCsv);
     stats.userProbes = probes.size();
   } else {
@@ -71,7 +87,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
 
   Level level;
   level.content = options.bake.content;
-  level.shOrder = 2;
+  level.shOrder = uint32_t(options.bake.shOrder);
   // Local origin: the probe bounds' centre rounded to whole metres (deterministic, keeps floats small).
   glm::dvec3 plo = probes[0], phi = probes[0];
   for (const auto& p : probes) {
@@ -82,14 +98,28 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   level.probes.reserve(probes.size());
   for (const auto& p : probes) level.probes.push_back(glm::vec3(p - level.origin));
   level.tets = buildTetRecords(probes, mesh, level.origin);
-  level.sh = bakeProbes(tracer, probes, options.bake);
-  timer.mark("bake");
+  if (!options.importShCsv.empty()) {
+    level.sh = std::move(imported.sh);
+    truncateShOrder(level.sh, options.bake.shOrder);
+    timer.mark("import");
+  } else {
+    level.sh = bakeProbes(tracer, probes, options.bake, &stats.bake);
+    timer.mark("bake");
+  }
+  DeringOptions dering = options.dering;
+  dering.threads = options.bake.threads;
+  stats.dering = deringProbes(level.sh, dering);
+  timer.mark("dering");
 
   std::ostringstream gen;
-  gen << "tetraprobe 0.1.0 bake; placement=" << (options.probesCsv.empty() ? "grid" : "user")
+  gen << "tetraprobe 0.1.0 bake; placement="
+      << (!options.importShCsv.empty() ? "imported"
+          : options.probesCsv.empty()  ? "grid"
+                                       : "user")
       << "; spacing=" << options.spacing << "; bounces=" << options.bake.bounces
       << "; samples=" << options.bake.samplesPerProbe << "; content=" << contentName(options.bake.content)
-      << "; seed=" << options.bake.seed;
+      << "; seed=" << options.bake.seed << "; sh_order=" << options.bake.shOrder
+      << "; dering=" << deringName(options.dering);
   level.generator = gen.str();
   return level;
 }

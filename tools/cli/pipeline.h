@@ -14,15 +14,20 @@
 namespace tetraprobe::cli {
 
 struct PipelineOptions {
-  double spacing = 1.0;   // grid spacing, metres
-  std::string probesCsv;  // user probes instead of the grid (kept exactly)
-  BakeOptions bake;
+  double spacing = 1.0;     // grid spacing, metres
+  std::string probesCsv;    // user probes instead of the grid (kept exactly)
+  std::string importShCsv;  // probes and their SH from another baker (bake/sh_csv.h); no path tracing
+  BakeOptions bake;         // bake.shOrder 1 also truncates imported SH
+  DeringOptions dering;     // applied to baked and imported SH alike
 };
 
 struct PipelineStats {
   size_t gridProbes = 0;      // placed by the grid before rejection
   size_t rejectedProbes = 0;  // inside geometry
   size_t userProbes = 0;
+  size_t importedProbes = 0;  // --import-sh
+  BakeStats bake;             // rays and time of the path tracer (zero when the SH were imported)
+  DeringStats dering;
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };
 
