@@ -68,6 +68,44 @@ double volumeAgreement(const SceneTracer& tracer, const Level& level, const Leve
   return double(agree) / double(total);
 }
 
+// Held-out check at real shading points (bake's sampleSurfacePoints, normals into open space, inside the
+// probe hull): fraction of (point, probe) answers agreeing with rays, and the mean interpolation weight that
+// lands on probes the rays say are hidden, without and with occlusion.
+struct SurfaceCheck {
+  int points = 0;
+  double agreement = 0.0, hiddenWeightBefore = 0.0, hiddenWeightAfter = 0.0;
+};
+SurfaceCheck surfaceCheck(const SceneTracer& tracer, const Level& level, const LevelOcclusion& occ,
+                          int count) {
+  const ProbeQuery query(level);
+  SurfaceCheck c;
+  long agree = 0, total = 0;
+  for (const SurfacePoint& sp : sampleSurfacePoints(tracer, count, 0x0cc1u)) {
+    const Location loc = query.locate(sp.position);
+    if (!loc.inside) continue;
+    const glm::vec3 x(sp.position);
+    const glm::vec4 vis = occlusionVisibility(level, occ, loc.tet, x, sp.normal);
+    const glm::vec4 w = applyOcclusion(loc.weights, vis);
+    for (int i = 0; i < 4; ++i) {
+      const bool ray =
+          test::rayVisible(tracer, x, sp.normal, level.probes[size_t(level.tets[size_t(loc.tet)].v[i])]);
+      agree += (vis[i] > 0.5f) == ray;
+      ++total;
+      if (!ray) {
+        c.hiddenWeightBefore += loc.weights[i];
+        c.hiddenWeightAfter += w[i];
+      }
+    }
+    ++c.points;
+  }
+  if (c.points > 0) {
+    c.agreement = double(agree) / double(total);
+    c.hiddenWeightBefore /= c.points;
+    c.hiddenWeightAfter /= c.points;
+  }
+  return c;
+}
+
 // No geometry in any tet: nothing stored at all, zero bytes, every probe visible.
 TEST(Occlusion, NoGeometryStoresNothing) {
   Scene s = test::emptyScene();
@@ -359,10 +397,24 @@ TEST(OcclusionScene, VeachAjarFigures) {
               grid.size(), probes.size(), level.tets.size());
   for (OcclusionMode mode : {OcclusionMode::kPlanes, OcclusionMode::kShadowMaps, OcclusionMode::kAuto}) {
     OcclusionStats st;
-    buildOcclusion(tracer, level, quiet(mode), &st);
+    OcclusionOptions options = quiet(mode);
+    if (const char* m = std::getenv("TETRAPROBE_OCCLUSION_MIN_AGREEMENT"))
+      options.minAgreement = std::atof(m);
+    const LevelOcclusion occ = buildOcclusion(tracer, level, options, &st);
     printStats((std::string("veach_ajar, ") + occlusionModeName(mode)).c_str(), st);
     EXPECT_GT(st.agreement, 0.5);
+    const SurfaceCheck c = surfaceCheck(tracer, level, occ, 20000);
+    std::printf(
+        "[veach_ajar, %s] %d held-out surface points: agreement %.4f, mean weight on hidden probes %.4f "
+        "without occlusion, %.4f with\n",
+        occlusionModeName(mode), c.points, c.agreement, c.hiddenWeightBefore, c.hiddenWeightAfter);
   }
+  OcclusionOptions one = quiet(), all = quiet();
+  one.threads = 1;
+  const LevelOcclusion a = buildOcclusion(tracer, level, one), b = buildOcclusion(tracer, level, all);
+  ASSERT_EQ(a.tets.size(), b.tets.size());
+  for (size_t t = 0; t < a.tets.size(); ++t) ASSERT_EQ(a.tets[t].header, b.tets[t].header) << "tet " << t;
+  EXPECT_EQ(a.shadowMaps, b.shadowMaps);
 }
 
 }  // namespace
