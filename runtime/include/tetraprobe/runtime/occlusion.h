@@ -1,5 +1,5 @@
 // Per-tet probe occlusion against light leaking through walls (Killzone Shadow Fall style, Valient 2014):
-// each tet stores nothing, up to three splitting planes, or one 16-texel shadow map per probe. At run time
+// each tet stores nothing, up to three splitting planes, or one 16-byte shadow map per probe. At run time
 // the probes a shading point cannot see drop out of the barycentric interpolation. Permissive: standard
 // library and GLM only. Built by tetraprobe::buildOcclusion (occlusion/build_occlusion.h); layout and
 // selection rule in docs/occlusion.md.
@@ -9,7 +9,7 @@
 // with the weights it already has. Records are flat, fixed-size and pointer-free (std430-ready):
 //   TetOcclusion   8 bytes per tet   (uvec2)
 //   OcclusionPlane 16 bytes per plane (vec4)
-//   shadow maps    64 bytes per tet that has them (4 probes x 16 uint8 texels, read as 16 uints)
+//   shadow maps    64 bytes per tet that has them (4 probes x 16 bytes: 15 lattice depths + 1 pad; uint[16])
 //
 // Bias (surfaces must not shadow themselves): a shading point with normal n is moved along n by
 //   delta = kOcclusionBias / max_i |grad(w_i) . n|   (grad w_i = row[i].xyz, grad w_3 = -sum of the others)
@@ -19,7 +19,7 @@
 // Soft falloff: planes blend the visibility of the cells on either side over a band of half-width
 // kOcclusionPlaneFalloff (in units of the plane's largest probe distance, see OcclusionPlane); shadow maps
 // fade over a band of half-width kOcclusionShadowFalloff (fraction of the probe-to-face distance) centred
-// on the stored depth. Visibility is a smoothstep of those, continuous in the point.
+// on the interpolated depth. Visibility is a smoothstep of those, continuous in the point.
 #pragma once
 
 #include <cstdint>
