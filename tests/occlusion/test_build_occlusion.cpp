@@ -45,9 +45,8 @@ glm::vec4 probeVisibility(const Level& level, const LevelOcclusion& occ, glm::ve
   return out;
 }
 
-// Fraction of (point, probe) answers that agree with rays, over random points inside the single tet that
-// are at least `margin` away from the plane z = zSkip bands given (points too close to a wall are left to
-// the surface checks).
+// Held-out check in a single-tet level at the world origin: fraction of (point, probe) answers that agree
+// with rays, over uniformly random points inside the tet (no normal), independent of the build's samples.
 double volumeAgreement(const SceneTracer& tracer, const Level& level, const LevelOcclusion& occ, int points,
                        unsigned seed) {
   std::mt19937 rng(seed);
@@ -147,6 +146,27 @@ TEST(Occlusion, SinglePlaneSplitsTheTet) {
   EXPECT_EQ(probeVisibility(level, occ, {0.5f, 0.5f, 0.5f}, {0, 0, 1}), above);
   EXPECT_EQ(probeVisibility(level, occ, {0.4f, 0.55f, 0.5f}, {0, 0, 1}), above);
   EXPECT_GE(volumeAgreement(tracer, level, occ, 400, 1), 0.98);
+}
+
+// The same wall far from the world origin: the build traces in world space, the data and the lookup live in
+// the level's local frame (world = origin + local), and the answers are the same.
+TEST(Occlusion, LocalFrameAwayFromTheOrigin) {
+  const glm::dvec3 origin(4096.0, -128.0, 2048.0);
+  Scene s = test::emptyScene();
+  test::addAxisQuad(s, 2, float(origin.z) + 0.5f, {float(origin.x) - 1, float(origin.y) - 1},
+                    {float(origin.x) + 2, float(origin.y) + 2});
+  const SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes = test::regularTet();
+  for (glm::dvec3& p : probes) p += origin;
+  const Level level = test::makeLevel(probes, origin);
+  OcclusionStats st;
+  const LevelOcclusion occ = buildOcclusion(tracer, level, quiet(), &st);
+  ASSERT_EQ(occ.tets.size(), 1u);
+  EXPECT_EQ(occ.tets[0].kind(), kOcclusionPlanes);
+  EXPECT_GE(st.agreement, 0.99);
+  EXPECT_EQ(probeVisibility(level, occ, {0.5f, 0.5f, 0.3f}, glm::vec3(0.0f)), glm::vec4(1, 1, 0, 0));
+  EXPECT_EQ(probeVisibility(level, occ, {0.5f, 0.5f, 0.7f}, glm::vec3(0.0f)), glm::vec4(0, 0, 1, 1));
+  EXPECT_EQ(probeVisibility(level, occ, {0.5f, 0.5f, 0.5f}, {0, 0, 1}), glm::vec4(0, 0, 1, 1));
 }
 
 // Forcing shadow maps on the same wall: 64 bytes of texels, and the answers still follow the wall.

@@ -71,10 +71,12 @@ inline void addBox(Scene& s, glm::vec3 lo, glm::vec3 hi, bool inward = false) {
   }
 }
 
-inline Level makeLevel(const std::vector<glm::dvec3>& probes) {
+// Level of world-space `probes` with its local frame at `origin` (world = origin + local).
+inline Level makeLevel(const std::vector<glm::dvec3>& probes, const glm::dvec3& origin = glm::dvec3(0.0)) {
   const TetMesh mesh = tetrahedralizeDelaunay(probes);
   Level level;
-  for (const glm::dvec3& p : probes) level.probes.push_back(glm::vec3(p));
+  level.origin = origin;
+  for (const glm::dvec3& p : probes) level.probes.push_back(glm::vec3(p - origin));
   level.sh.resize(probes.size());
   level.tets = buildTetRecords(probes, mesh, level.origin);
   return level;
