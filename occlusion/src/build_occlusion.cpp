@@ -30,6 +30,7 @@ namespace {
 constexpr double kMinPolygonArea = 1e-8;   // x scale^2: a triangle touching the tet only on its boundary
 constexpr double kClusterCos = 0.9659258;  // cos 15 deg: polygons within it share a plane...
 constexpr double kClusterOffset = 0.03;    // ...when their centroids are within this x scale of it
+constexpr size_t kCandidateClusters = 8;   // planes are chosen among the largest clusters
 constexpr double kRayOffset = 1e-5;        // x scale: surface samples start this far off the surface
 constexpr int kTexelRays = 9;              // shadow-map rays per texel (3x3 subdivision of its sub-triangle)
 constexpr int kTexelRank = 4;              // a texel stores the median of their hit fractions
@@ -317,19 +318,38 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
     return r;
   }
   if (mode == OcclusionMode::kAuto || mode == OcclusionMode::kPlanes) {
-    const std::vector<Cluster> clusters = clusterPlanes(polys, frame.scale);
-    const uint32_t maxPlanes = uint32_t(std::min<size_t>(3, clusters.size()));
-    for (uint32_t count = 1; count <= maxPlanes; ++count) {
-      Candidate c;
-      if (!makePlanes(c, clusters, count, frame, tet, samples)) break;
-      score(c, samples, tet);
-      consider(c);
-      if (mode == OcclusionMode::kAuto && goodEnough(c)) {
-        r.chosen = c;
+    // Greedy forward selection: each added plane is the candidate cluster (largest kCandidateClusters by
+    // area) that answers the most samples right together with the planes already chosen (ties: larger area).
+    std::vector<Cluster> clusters = clusterPlanes(polys, frame.scale);
+    if (clusters.size() > kCandidateClusters) clusters.resize(kCandidateClusters);
+    std::vector<Cluster> chosen;
+    std::vector<bool> used(clusters.size(), false);
+    for (uint32_t count = 1; count <= 3 && count <= clusters.size(); ++count) {
+      Candidate bestAdd;
+      size_t bestIndex = clusters.size();
+      chosen.push_back(Cluster{});
+      for (size_t k = 0; k < clusters.size(); ++k) {
+        if (used[k]) continue;
+        chosen.back() = clusters[k];
+        Candidate c;
+        if (!makePlanes(c, chosen, count, frame, tet, samples)) continue;
+        score(c, samples, tet);
+        if (bestIndex == clusters.size() || c.agreeing > bestAdd.agreeing) {
+          bestAdd = c;
+          bestIndex = k;
+        }
+      }
+      if (bestIndex == clusters.size()) break;
+      used[bestIndex] = true;
+      chosen.back() = clusters[bestIndex];
+      consider(bestAdd);
+      if (mode == OcclusionMode::kAuto && goodEnough(bestAdd)) {
+        r.chosen = bestAdd;
         return r;
       }
     }
   }
+
   if (mode == OcclusionMode::kAuto || mode == OcclusionMode::kShadowMaps) {
     Candidate c;
     makeShadowMaps(c, ctx, frame, r.rays);

@@ -66,8 +66,9 @@ struct OcclusionStats {
 // in auto mode the first candidate that answers at least options.minAgreement of them like the rays wins, in
 // order of cost: none (8 bytes), 1, 2, 3 planes (8 + 16 per plane), shadow maps (8 + 64). When none
 // reaches it, the best-agreeing one wins (ties: the cheaper). Planes come from the clipped triangles
-// clustered by plane (largest clipped area first); each cell's visible-probe mask is the majority answer of
-// the samples in it. Shadow maps trace the 15 lattice vertices of each probe's opposite face (4x4 split).
+// clustered by plane, added greedily (among the 8 largest clusters, the one agreeing most); each cell's
+// visible-probe mask is the majority answer of the samples in it. Shadow maps trace the 15 lattice vertices
+// of each probe's opposite face (4x4 split). The figures in docs/occlusion.md suggest minAgreement 0.98.
 //
 // The result is empty (nothing stored) when no tet needs data or mode is kNone. Throws InputError for an
 // invalid level (validateLevel), minAgreement outside [0, 1], negative sample counts, or more data than the
