@@ -20,17 +20,31 @@ namespace tetraprobe {
 namespace {
 
 constexpr std::array<uint8_t, 8> kMagic = {0x89, 'T', 'P', 'B', '\r', '\n', 0x1A, '\n'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr uint32_t kHeaderBytes = 80;
-constexpr uint32_t kHeaderCrcOffset = 76;               // CRC-32 of header bytes [0, 76)
-constexpr uint64_t kProbeBytes = 3 * 4;                 // position: 3 x f32
-constexpr uint64_t kShBytes = 27 * 4;                   // SH: 9 coefficients x RGB f32
-constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4 + 12 * 4;  // v[4] i32, n[4] i32, row[3][4] f32
-constexpr uint64_t kTrailerBytes = 4;                   // CRC-32 of bytes [kHeaderBytes, size - 4)
-constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);     // probe and tet indices are int32
+constexpr uint32_t kHeaderCrcOffset = 76;    // CRC-32 of header bytes [0, 76)
+constexpr uint64_t kSectionEntryBytes = 24;  // tag u32, flags u32, offset u64, size u64
+constexpr uint32_t kMaxSections = 64;
+constexpr uint64_t kMaxSectionBytes = uint64_t(1) << 40;  // bounds every size sum below 2^47
+constexpr uint32_t kSectionRequired = 1u;  // flags: a reader that does not know the tag must refuse
+constexpr uint64_t kProbeBytes = 3 * 4;    // position: 3 x f32
+constexpr uint64_t kShBytes = 27 * 4;      // SH: 9 coefficients x RGB f32
+constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4 + 12 * 4;                    // v[4] i32, n[4] i32, row[3][4] f32
+constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
+constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
+constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
 constexpr uint64_t kMaxGeneratorBytes = 1u << 20;
 static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 80-byte std430 Tet");
 static_assert(kShBytes == sizeof(ShRgb), "the file's SH record is the 108-byte ShRgb");
+static_assert(kOuterCellBytes == sizeof(OuterCell), "the file's outer cell record is the 80-byte OuterCell");
+
+// Section tags: four ASCII characters, read as a little-endian u32.
+constexpr uint32_t tag(const char (&s)[5]) {
+  return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 |
+         uint32_t(uint8_t(s[3])) << 24;
+}
+constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
+                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC");
 
 // CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, as zlib's crc32()).
 constexpr std::array<uint32_t, 256> makeCrcTable() {
@@ -170,15 +184,99 @@ LevelResult validateLevel(const Level& level) {
       for (int c = 0; c < 4; ++c)
         if (!std::isfinite(tet.row[r][c])) return corrupt(where + "non-finite barycentric row");
   }
+  if (!level.outerCells.empty()) {
+    int64_t hullFaces = 0;
+    for (const Tet& tet : level.tets)
+      for (int f = 0; f < 4; ++f) hullFaces += tet.n[f] < 0;
+    const auto cellCount = int64_t(level.outerCells.size());
+    if (cellCount != hullFaces)
+      return corrupt(std::to_string(cellCount) + " outer cells for " + std::to_string(hullFaces) +
+                     " hull faces");
+    for (int64_t k = 0; k < cellCount; ++k) {
+      const OuterCell& c = level.outerCells[size_t(k)];
+      const std::string where = "outer cell " + std::to_string(k) + ": ";
+      if (c.tet < 0 || c.tet >= tetCount || c.face < 0 || c.face > 3)
+        return corrupt(where + "tet " + std::to_string(c.tet) + " face " + std::to_string(c.face) +
+                       " out of range");
+      if (k > 0) {  // strictly increasing (tet, face): the order lookups binary-search
+        const OuterCell& p = level.outerCells[size_t(k - 1)];
+        if (p.tet > c.tet || (p.tet == c.tet && p.face >= c.face))
+          return corrupt(where + "out of (tet, face) order");
+      }
+      const Tet& tet = level.tets[size_t(c.tet)];
+      if (tet.n[c.face] != -1) return corrupt(where + "names a face that is not on the hull");
+      for (int i = 0; i < 3; ++i) {
+        bool onFace = false;
+        for (int j = 0; j < 4; ++j) onFace = onFace || (j != c.face && tet.v[j] == c.v[i]);
+        for (int j = 0; j < i; ++j) onFace = onFace && c.v[j] != c.v[i];
+        if (!onFace)
+          return corrupt(where + "probe " + std::to_string(c.v[i]) + " is not a vertex of its hull face");
+        const int32_t n = c.n[i];
+        if (n < -1 || n >= cellCount || n == k)
+          return corrupt(where + "link " + std::to_string(n) + " out of range");
+        if (n >= 0) {
+          const OuterCell& o = level.outerCells[size_t(n)];
+          if (o.n[0] != k && o.n[1] != k && o.n[2] != k)
+            return corrupt(where + "link " + std::to_string(n) + " does not name it back");
+        }
+        const glm::vec3 nrm(c.normal[i][0], c.normal[i][1], c.normal[i][2]);
+        const float len2 = nrm.x * nrm.x + nrm.y * nrm.y + nrm.z * nrm.z;
+        if (!finite3(nrm) || !(std::abs(len2 - 1.0f) < 1e-3f) || c.normal[i][3] != 0.0f)
+          return corrupt(where + "normal " + std::to_string(i) + " is not a unit vector");
+      }
+    }
+  }
   return {};
 }
 
 LevelResult saveLevel(const std::string& path, const Level& level) {
   if (LevelResult v = validateLevel(level); !v)
     return fail(LevelStatus::kWriteFailed, path + ": refusing to write an invalid level: " + v.message);
+  // Section payloads, in file order.
+  struct Section {
+    uint32_t tag;
+    uint32_t flags;
+    Writer bytes;
+  };
+  std::vector<Section> sections;
+  sections.push_back({kTagProbes, kSectionRequired, {}});
+  for (const glm::vec3& p : level.probes) {
+    sections.back().bytes.f32(p.x);
+    sections.back().bytes.f32(p.y);
+    sections.back().bytes.f32(p.z);
+  }
+  sections.push_back({kTagSh, kSectionRequired, {}});
+  for (const ShRgb& sh : level.sh)
+    for (const glm::vec3& c : sh.c) {
+      sections.back().bytes.f32(c.x);
+      sections.back().bytes.f32(c.y);
+      sections.back().bytes.f32(c.z);
+    }
+  sections.push_back({kTagTets, kSectionRequired, {}});
+  for (const Tet& t : level.tets) {
+    Writer& w = sections.back().bytes;
+    for (int32_t v : t.v) w.i32(v);
+    for (int32_t n : t.n) w.i32(n);
+    for (const auto& row : t.row)
+      for (float x : row) w.f32(x);
+  }
+  sections.push_back({kTagGenerator, kSectionRequired, {}});
+  sections.back().bytes.bytes(level.generator.data(), level.generator.size());
+  if (!level.outerCells.empty()) {
+    sections.push_back({kTagOuterCells, 0, {}});
+    for (const OuterCell& c : level.outerCells) {
+      Writer& w = sections.back().bytes;
+      for (int32_t v : c.v) w.i32(v);
+      w.i32(c.tet);
+      for (int32_t n : c.n) w.i32(n);
+      w.i32(c.face);
+      for (const auto& n : c.normal)
+        for (int a = 0; a < 3; ++a) w.f32(n[a]);
+      for (int pad = 0; pad < 3; ++pad) w.u32(0);
+    }
+  }
+
   Writer w;
-  w.str().reserve(size_t(kHeaderBytes + level.probes.size() * (kProbeBytes + kShBytes) +
-                         level.tets.size() * kTetBytes + level.generator.size() + kTrailerBytes));
   w.bytes(kMagic.data(), kMagic.size());
   w.u32(kVersion);
   w.u32(kHeaderBytes);
@@ -190,26 +288,18 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   w.u64(level.probes.size());
   w.u64(level.tets.size());
   w.u64(level.generator.size());
-  w.u32(0);  // reserved
+  w.u32(uint32_t(sections.size()));
   w.u32(w.crcOf(0, kHeaderCrcOffset));
-  for (const glm::vec3& p : level.probes) {
-    w.f32(p.x);
-    w.f32(p.y);
-    w.f32(p.z);
+  uint64_t offset = kHeaderBytes + kSectionEntryBytes * sections.size() + 4;
+  for (Section& sec : sections) {
+    w.u32(sec.tag);
+    w.u32(sec.flags);
+    w.u64(offset);
+    w.u64(sec.bytes.str().size());
+    offset += sec.bytes.str().size();
   }
-  for (const ShRgb& sh : level.sh)
-    for (const glm::vec3& c : sh.c) {
-      w.f32(c.x);
-      w.f32(c.y);
-      w.f32(c.z);
-    }
-  for (const Tet& t : level.tets) {
-    for (int32_t v : t.v) w.i32(v);
-    for (int32_t n : t.n) w.i32(n);
-    for (const auto& row : t.row)
-      for (float x : row) w.f32(x);
-  }
-  w.bytes(level.generator.data(), level.generator.size());
+  w.u32(w.crcOf(kHeaderBytes, w.str().size()));
+  for (Section& sec : sections) w.bytes(sec.bytes.str().data(), sec.bytes.str().size());
   w.u32(w.crcOf(kHeaderBytes, w.str().size()));
   std::string error;
   if (!writeFileAtomic(path, w.str(), &error)) return fail(LevelStatus::kWriteFailed, error);
@@ -250,40 +340,98 @@ LevelResult loadLevel(const std::string& path, Level& out) {
   level.origin.y = r.f64();
   level.origin.z = r.f64();
   const uint64_t probeCount = r.u64(), tetCount = r.u64(), generatorBytes = r.u64();
-  const uint32_t reserved = r.u32();
-  if (headerBytes != kHeaderBytes || reserved != 0)
-    return fail(LevelStatus::kCorrupt, name + "unexpected header size or reserved field");
-  // Counts are checked against the limits first, so the size arithmetic below cannot overflow (< 2^40).
+  const uint32_t sectionCount = r.u32();
+  if (headerBytes != kHeaderBytes || sectionCount > kMaxSections)
+    return fail(LevelStatus::kCorrupt, name + "unexpected header size or " + std::to_string(sectionCount) +
+                                           " sections (at most " + std::to_string(kMaxSections) + ")");
+  // Counts are checked against the limits first, so the size arithmetic below cannot overflow (< 2^48).
   if (probeCount > kMaxCount || tetCount > kMaxCount || generatorBytes > kMaxGeneratorBytes)
     return fail(LevelStatus::kCorrupt, name + "implausible counts: " + std::to_string(probeCount) +
                                            " probes, " + std::to_string(tetCount) + " tets, " +
                                            std::to_string(generatorBytes) + " generator bytes");
-  const uint64_t expected = kHeaderBytes + probeCount * (kProbeBytes + kShBytes) + tetCount * kTetBytes +
-                            generatorBytes + kTrailerBytes;
+  const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
+  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShBytes) + tetCount * kTetBytes +
+                           generatorBytes + kTrailerBytes;
+  if (size < minimum)
+    return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
+                                             " bytes, the header needs at least " + std::to_string(minimum));
+  Reader tableCrc(data + tableEnd - 4);
+  if (crc32(data + kHeaderBytes, size_t(tableEnd - 4 - kHeaderBytes)) != tableCrc.u32())
+    return fail(LevelStatus::kCorrupt, name + "section table checksum mismatch");
+
+  // The section table: packed in table order after it, each size bounded so the sum cannot overflow.
+  struct Section {
+    uint64_t offset = 0, size = 0;
+    bool present = false;
+  };
+  Section probes, sh, tets, generator, outer;
+  uint64_t expected = tableEnd;
+  Reader table(data + kHeaderBytes);
+  for (uint32_t i = 0; i < sectionCount; ++i) {
+    const uint32_t t = table.u32(), flags = table.u32();
+    const uint64_t offset = table.u64(), bytes = table.u64();
+    const std::string where = "section " + std::to_string(i) + ": ";
+    if ((flags & ~kSectionRequired) != 0 || offset != expected || bytes > kMaxSectionBytes)
+      return fail(LevelStatus::kCorrupt, name + where + "bad flags, offset or size");
+    expected += bytes;
+    Section* known = t == kTagProbes       ? &probes
+                     : t == kTagSh         ? &sh
+                     : t == kTagTets       ? &tets
+                     : t == kTagGenerator  ? &generator
+                     : t == kTagOuterCells ? &outer
+                                           : nullptr;
+    if (!known) {
+      if (flags & kSectionRequired)
+        return fail(LevelStatus::kUnsupportedVersion,
+                    name + where + "unknown required section tag " + std::to_string(t));
+      continue;  // optional data this reader does not know: skipped (still covered by the payload CRC)
+    }
+    if (known->present) return fail(LevelStatus::kCorrupt, name + where + "repeated section tag");
+    *known = {offset, bytes, true};
+  }
+  expected += kTrailerBytes;
   if (size < expected)
     return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
-                                             " bytes, the header needs " + std::to_string(expected));
+                                             " bytes, the section table needs " + std::to_string(expected));
   if (size > expected)
     return fail(LevelStatus::kCorrupt, name + std::to_string(size - expected) + " unexpected trailing bytes");
   Reader trailer(data + expected - kTrailerBytes);
   if (crc32(data + kHeaderBytes, size_t(expected - kHeaderBytes - kTrailerBytes)) != trailer.u32())
     return fail(LevelStatus::kCorrupt, name + "payload checksum mismatch");
 
+  // Each section's own validation: present, and sized as the header's counts say.
+  const auto sized = [&](const Section& sec, uint64_t want, const char* what) -> LevelResult {
+    if (!sec.present) return fail(LevelStatus::kCorrupt, name + "missing " + what + " section");
+    if (sec.size != want)
+      return fail(LevelStatus::kCorrupt, name + what + " section of " + std::to_string(sec.size) +
+                                             " bytes, the header's counts need " + std::to_string(want));
+    return {};
+  };
+  if (LevelResult e = sized(probes, probeCount * kProbeBytes, "probe"); !e) return e;
+  if (LevelResult e = sized(sh, probeCount * kShBytes, "SH"); !e) return e;
+  if (LevelResult e = sized(tets, tetCount * kTetBytes, "tet"); !e) return e;
+  if (LevelResult e = sized(generator, generatorBytes, "generator"); !e) return e;
+  if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
+    return fail(LevelStatus::kCorrupt,
+                name + "outer cell section of " + std::to_string(outer.size) + " bytes is not whole records");
+
   // Sizes are now known to be backed by the file: allocate and parse.
-  Reader body(data + kHeaderBytes);
+  Reader body(data + probes.offset);
   level.probes.resize(size_t(probeCount));
   for (glm::vec3& p : level.probes) {
     p.x = body.f32();
     p.y = body.f32();
     p.z = body.f32();
   }
+  body = Reader(data + sh.offset);
   level.sh.resize(size_t(probeCount));
-  for (ShRgb& sh : level.sh)
-    for (glm::vec3& c : sh.c) {
+  for (ShRgb& s : level.sh)
+    for (glm::vec3& c : s.c) {
       c.x = body.f32();
       c.y = body.f32();
       c.z = body.f32();
     }
+  body = Reader(data + tets.offset);
   level.tets.resize(size_t(tetCount));
   for (Tet& t : level.tets) {
     for (int32_t& v : t.v) v = body.i32();
@@ -291,8 +439,23 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     for (auto& row : t.row)
       for (float& x : row) x = body.f32();
   }
-  const uint8_t* gen = body.skip(size_t(generatorBytes));
-  level.generator.assign(reinterpret_cast<const char*>(gen), size_t(generatorBytes));
+  level.generator.assign(reinterpret_cast<const char*>(data + generator.offset), size_t(generatorBytes));
+  if (outer.present) {
+    body = Reader(data + outer.offset);
+    level.outerCells.resize(size_t(outer.size / kOuterCellBytes));
+    for (OuterCell& c : level.outerCells) {
+      for (int32_t& v : c.v) v = body.i32();
+      c.tet = body.i32();
+      for (int32_t& n : c.n) n = body.i32();
+      c.face = body.i32();
+      for (auto& n : c.normal) {
+        for (int a = 0; a < 3; ++a) n[a] = body.f32();
+        n[3] = 0.0f;
+      }
+      for (int pad = 0; pad < 3; ++pad)
+        if (body.u32() != 0) return fail(LevelStatus::kCorrupt, name + "outer cell padding is not zero");
+    }
+  }
 
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);
   out = std::move(level);

@@ -12,6 +12,7 @@
 #include "test_levels.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
@@ -41,6 +42,7 @@ Level smallLevel() {
   Level level =
       test::makeLevel(test::randomBoxPoints(10, 3, {-2, -1, -3}, {2, 1, 3}), {5000.25, -20.5, 1e4}, 9);
   level.content = kContentAll;
+  level.outerCells = buildOuterCells(level.probes, level.tets);
   return level;
 }
 
@@ -78,7 +80,56 @@ void fixPayloadCrc(std::vector<char>& b) {
 }
 
 bool emptyLevel(const Level& l) {
-  return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty();
+  return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty() && l.outerCells.empty();
+}
+
+uint32_t getU32(const std::vector<char>& b, size_t at) {
+  uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= uint32_t(uint8_t(b[at + size_t(i)])) << (8 * i);
+  return v;
+}
+uint64_t getU64(const std::vector<char>& b, size_t at) {
+  return uint64_t(getU32(b, at)) | uint64_t(getU32(b, at + 4)) << 32;
+}
+uint32_t tagOf(const char* s) {
+  return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 |
+         uint32_t(uint8_t(s[3])) << 24;
+}
+
+// Offset of the section tagged `tag` (docs/level_format.md: the table follows the 80-byte header).
+size_t sectionOffset(const std::vector<char>& b, const char* tag) {
+  const uint32_t n = getU32(b, 72);
+  for (uint32_t i = 0; i < n; ++i)
+    if (getU32(b, 80 + 24 * i) == tagOf(tag)) return size_t(getU64(b, 80 + 24 * i + 8));
+  ADD_FAILURE() << "no section " << tag;
+  return 0;
+}
+
+// The file with one more section appended (table entry, data), every checksum made consistent again.
+std::vector<char> withExtraSection(const std::vector<char>& full, const char* tag, uint32_t flags,
+                                   const std::string& data) {
+  const uint32_t n = getU32(full, 72);
+  const size_t oldTableEnd = 80 + 24 * size_t(n) + 4, newTableEnd = oldTableEnd + 24;
+  std::vector<char> b(full.begin(), full.begin() + 80);
+  putU32(b, 72, n + 1);
+  fixHeaderCrc(b);
+  b.resize(newTableEnd);
+  for (uint32_t i = 0; i < n; ++i) {
+    const size_t e = 80 + 24 * size_t(i);
+    std::copy(full.begin() + long(e), full.begin() + long(e + 24), b.begin() + long(e));
+    putU64(b, e + 8, getU64(full, e + 8) + 24);
+  }
+  const size_t e = 80 + 24 * size_t(n);
+  putU32(b, e, tagOf(tag));
+  putU32(b, e + 4, flags);
+  putU64(b, e + 8, full.size() - 4 + 24);
+  putU64(b, e + 16, data.size());
+  putU32(b, newTableEnd - 4, crc32(b.data() + 80, newTableEnd - 4 - 80));
+  b.insert(b.end(), full.begin() + long(oldTableEnd), full.end() - 4);
+  b.insert(b.end(), data.begin(), data.end());
+  b.resize(b.size() + 4);
+  fixPayloadCrc(b);
+  return b;
 }
 
 // A bake must reload exactly (no float re-rounding, nothing dropped), and equal input must give equal bytes.
@@ -99,13 +150,20 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(std::memcmp(back.sh.data(), level.sh.data(), level.sh.size() * sizeof(ShRgb)), 0);
   EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
   EXPECT_EQ(back.generator, level.generator);
+  ASSERT_EQ(back.outerCells.size(), level.outerCells.size());
+  ASSERT_FALSE(level.outerCells.empty());
+  EXPECT_EQ(std::memcmp(back.outerCells.data(), level.outerCells.data(),
+                        level.outerCells.size() * sizeof(OuterCell)),
+            0);
   ASSERT_TRUE(saveLevel(dir.file("b.tpb"), level));
   ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
-  // The documented size: 80-byte header, 120 bytes per probe, 80 per tet, the generator, a 4-byte CRC.
-  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
-            80 + 120 * level.probes.size() + 80 * level.tets.size() + level.generator.size() + 4);
+  // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 120 bytes per
+  // probe, 80 per tet, the generator, 80 per outer cell, a 4-byte CRC.
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 5 * 24 + 4 + 120 * level.probes.size() +
+                                                   80 * level.tets.size() + level.generator.size() +
+                                                   80 * level.outerCells.size() + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -150,15 +208,20 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   const Level level = smallLevel();
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
-  const size_t tets = 80 + 120 * level.probes.size();
+  const size_t tets = sectionOffset(full, "TETS"), outer = sectionOffset(full, "OUTC");
   const struct {
     size_t offset;
     uint32_t value;
     const char* needle;
-  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},  // tet 0 vertex 0
-               {tets + 4, uint32_t(-7), "out of range"},                   // tet 0 vertex 1
-               {tets + 16, uint32_t(level.tets.size()), "out of range"},   // tet 0 neighbour 0
-               {tets + 32, 0x7FC00000u, "non-finite"}};                    // tet 0 row: NaN
+  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},        // tet 0 vertex 0
+               {tets + 4, uint32_t(-7), "out of range"},                         // tet 0 vertex 1
+               {tets + 16, uint32_t(level.tets.size()), "out of range"},         // tet 0 neighbour 0
+               {tets + 32, 0x7FC00000u, "non-finite"},                           // tet 0 row: NaN
+               {outer + 12, uint32_t(level.tets.size()), "out of range"},        // outer cell 0's tet
+               {outer + 16, uint32_t(level.outerCells.size()), "out of range"},  // outer cell 0's link 0
+               {outer + 0, uint32_t(level.probes.size() + 3), "not a vertex"},   // outer cell 0's probe 0
+               {outer + 32, 0x7FC00000u, "not a unit vector"},                   // outer cell 0's normal: NaN
+               {outer + 76, 1u, "padding"}};
   for (const auto& c : cases) {
     std::vector<char> b = full;
     putU32(b, c.offset, c.value);
@@ -249,10 +312,12 @@ TEST(LevelFile, RejectsOtherFilesAndVersions) {
   EXPECT_EQ(loadLevel(dir.file("text.tpb"), out).status, LevelStatus::kNotALevel);
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
   std::vector<char> b = bytesOf(dir.file("full.tpb"));
-  putU32(b, 8, 2);
-  fixHeaderCrc(b);
-  writeBytes(dir.file("v2.tpb"), b, b.size());
-  EXPECT_EQ(loadLevel(dir.file("v2.tpb"), out).status, LevelStatus::kUnsupportedVersion);
+  for (uint32_t version : {1u, 3u}) {  // version 1 had no section table: re-bake such levels
+    putU32(b, 8, version);
+    fixHeaderCrc(b);
+    writeBytes(dir.file("other.tpb"), b, b.size());
+    EXPECT_EQ(loadLevel(dir.file("other.tpb"), out).status, LevelStatus::kUnsupportedVersion) << version;
+  }
   b = bytesOf(dir.file("full.tpb"));
   b.push_back(0);
   writeBytes(dir.file("long.tpb"), b, b.size());
@@ -285,7 +350,57 @@ TEST(LevelFile, EmptyLevelRoundTrips) {
   Level back;
   ASSERT_TRUE(loadLevel(dir.file("empty.tpb"), back));
   EXPECT_TRUE(emptyLevel(back));
-  EXPECT_EQ(bytesOf(dir.file("empty.tpb")).size(), 84u);
+  EXPECT_EQ(bytesOf(dir.file("empty.tpb")).size(), 80u + 4 * 24 + 4 + 4);  // four empty sections
+}
+
+// Optional data a reader does not know (a later tool's section) is skipped; the rest loads unchanged.
+TEST(LevelFile, SkipsUnknownOptionalSection) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
+  const std::vector<char> b = withExtraSection(bytesOf(dir.file("full.tpb")), "ZZZZ", 0, "future data");
+  writeBytes(dir.file("extra.tpb"), b, b.size());
+  Level back;
+  const LevelResult r = loadLevel(dir.file("extra.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  EXPECT_EQ(back.tets.size(), level.tets.size());
+  EXPECT_EQ(back.outerCells.size(), level.outerCells.size());
+  // Its bytes are still covered by the checksum.
+  std::vector<char> bad = b;
+  bad[b.size() - 6] ^= 1;
+  writeBytes(dir.file("bad.tpb"), bad, bad.size());
+  EXPECT_EQ(loadLevel(dir.file("bad.tpb"), back).status, LevelStatus::kCorrupt);
+}
+
+// A section flagged as required that this reader does not know must not be ignored.
+TEST(LevelFile, RefusesUnknownRequiredSection) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> b = withExtraSection(bytesOf(dir.file("full.tpb")), "ZZZZ", 1, "must understand");
+  writeBytes(dir.file("req.tpb"), b, b.size());
+  Level out;
+  EXPECT_EQ(loadLevel(dir.file("req.tpb"), out).status, LevelStatus::kUnsupportedVersion);
+  EXPECT_TRUE(emptyLevel(out));
+  // A second copy of a known section is corrupt, not silently preferred.
+  const std::vector<char> twice = withExtraSection(bytesOf(dir.file("full.tpb")), "GENR", 1, "");
+  writeBytes(dir.file("twice.tpb"), twice, twice.size());
+  EXPECT_EQ(loadLevel(dir.file("twice.tpb"), out).status, LevelStatus::kCorrupt);
+}
+
+// A level stored without outer cells (they are optional) still answers outside the hull from outer cells the
+// query builds itself, the same ones a stored level carries.
+TEST(LevelFile, OuterCellsOptional) {
+  TempDir dir;
+  Level level = smallLevel();
+  const std::vector<OuterCell> cells = level.outerCells;
+  level.outerCells.clear();
+  ASSERT_TRUE(saveLevel(dir.file("bare.tpb"), level));
+  Level back;
+  ASSERT_TRUE(loadLevel(dir.file("bare.tpb"), back));
+  EXPECT_TRUE(back.outerCells.empty());
+  const ProbeQuery q(back);
+  ASSERT_EQ(q.outerCells().size(), cells.size());
+  EXPECT_EQ(std::memcmp(q.outerCells().data(), cells.data(), cells.size() * sizeof(OuterCell)), 0);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/tetra/placement.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
@@ -98,6 +99,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   level.probes.reserve(probes.size());
   for (const auto& p : probes) level.probes.push_back(glm::vec3(p - level.origin));
   level.tets = buildTetRecords(probes, mesh, level.origin);
+  level.outerCells = buildOuterCells(level.probes, level.tets);  // continuous answers outside the hull
   if (!options.importShCsv.empty()) {
     level.sh = std::move(imported.sh);
     truncateShOrder(level.sh, options.bake.shOrder);
