@@ -135,9 +135,9 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
 
 // Weights after occlusion: weights * visibility, renormalized to sum to 1. When the visible weight sum s is
 // below kOcclusionFallbackSum (every probe occluded), the result blends continuously into the fallback, the
-// unoccluded weights: (s/k) renormalized + (1 - s/k) weights. Non-finite or negative inputs are treated as
-// 0 (weights) or 1 (visibility); weights that do not sum to a positive number give 0.25 each. The result is
-// always finite, non-negative and sums to 1.
+// unoccluded weights: (s/k) renormalized + (1 - s/k) weights. Non-finite or negative weights count as 0 and
+// the rest are renormalized first (none left: 0.25 each); visibility is clamped to [0, 1], non-finite
+// counts as 1. The result is always finite, non-negative and sums to 1.
 glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility);
 
 }  // namespace tetraprobe
