@@ -43,6 +43,17 @@ glm::vec3 sphereDirection(const glm::dmat3& rotation, int k, int n) {
   return glm::vec3(glm::normalize(rotation * sphericalFibonacci(k, n)));
 }
 
+// The unrotated n-point set, cached per thread (the same doubles sphericalFibonacci gives: saves a double
+// sincos per path).
+const std::vector<glm::dvec3>& fibonacciSet(int n) {
+  thread_local std::vector<glm::dvec3> set;
+  if (set.size() != size_t(n)) {
+    set.resize(size_t(n));
+    for (int k = 0; k < n; ++k) set[size_t(k)] = sphericalFibonacci(k, n);
+  }
+  return set;
+}
+
 // Direct light from point, spot and directional lights at a probe, as exact SH projections of deltas.
 void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh) {
   const float eps = tracer.rayEpsilon();
@@ -72,9 +83,10 @@ ShRgb bake_detail::bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, 
   const TraceSettings settings{options.bounces, options.content};
   const int n = options.samplesPerProbe;
   const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index));
+  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(n);
   double acc[kShCoeffCount][3] = {};
   for (int k = 0; k < n; ++k) {
-    const glm::vec3 d = sphereDirection(rotation, k, n);
+    const glm::vec3 d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
     Rng rng(streamKey(options.seed, index, uint64_t(k) + 1));
     const glm::vec3 l = incidentRadiance(tracer, probe, d, 0.0f, settings, rng);
     const auto y = shBasis<double>(d.x, d.y, d.z);
