@@ -72,6 +72,7 @@ TEST(Filler, ImprovesWorstDihedralOnTwoPlanesCgal) {
   const size_t n = p.size();
   const PlacedProbes original = p;
   FillerOptions opt;
+  opt.snapToLattice = false;  // jittered planes are no voxel lattice
   const FillerResult r = addSliverFillers(p, opt, nullptr);
   EXPECT_GT(r.added, 0u);
   EXPECT_EQ(p.size(), n + r.added);
@@ -102,8 +103,10 @@ TEST(Filler, ImprovesWorstDihedralOnTwoPlanesTetGen) {
 TEST(Filler, InsideCallbackRejectsCandidates) {
   PlacedProbes p = twoPlanes();
   const size_t n = p.size();
+  FillerOptions opt;
+  opt.snapToLattice = false;
   const FillerResult r = addSliverFillers(
-      p, {}, [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
+      p, opt, [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
   EXPECT_EQ(r.added, 0u);
   EXPECT_GT(r.rejected, 0u);
   EXPECT_EQ(p.size(), n);

@@ -54,8 +54,9 @@ TEST(TriangleBox, SeparatingAxisCases) {
   EXPECT_FALSE(triangleBoxOverlap({2.2, 0.5, -1}, {0.5, 2.2, 2}, {1.5, 1.5, 3}, lo, hi));
 }
 
-// Valient's rule: a surface probe sits at the centre of every empty voxel that touches a voxel with
-// geometry, and nowhere else. Cross-checked against brute-force triangle-box tests over the whole grid.
+// Valient's rule: a surface probe sits at the centre of every empty voxel (inside the level's bounds) that
+// touches a voxel with geometry, and nowhere else. Cross-checked against brute-force triangle-box tests over
+// the whole grid.
 TEST(VoxelPlacement, SurfaceProbesLieInEmptyVoxelsNextToGeometry) {
   const Scene scene = smallScene();
   VoxelPlacementOptions opt;
@@ -64,7 +65,8 @@ TEST(VoxelPlacement, SurfaceProbesLieInEmptyVoxelsNextToGeometry) {
   opt.fillerSpacing = 0.0;
   const PlacedProbes placed = placeVoxelProbes(scene, opt);
   std::set<std::array<int64_t, 3>> surface;
-  const glm::dvec3 origin = glm::dvec3(0.0, 0.0, 0.0) - glm::dvec3(opt.spacing);  // scene min - spacing
+  // Voxel centres on the lattice spacing * Z^3; the first voxel starts 1.5 spacings below floor(min).
+  const glm::dvec3 origin = glm::dvec3(-1.5 * opt.spacing);
   for (size_t i = 0; i < placed.size(); ++i) {
     if (placed.kinds[i] != ProbeKind::kSurface) continue;
     const glm::dvec3 c = (placed.positions[i] - origin) / opt.spacing - 0.5;
@@ -73,6 +75,9 @@ TEST(VoxelPlacement, SurfaceProbesLieInEmptyVoxelsNextToGeometry) {
     EXPECT_TRUE(surface.insert(cell).second) << "two surface probes in one voxel";
     EXPECT_EQ(placed.spacing[i], opt.spacing);
   }
+  glm::vec3 flo, fhi;
+  sceneBounds(scene, flo, fhi);
+  const glm::dvec3 blo(flo), bhi(fhi);
   // Brute force over the scene bounds grown by two voxels.
   size_t expected = 0;
   for (int64_t z = -1; z < 12; ++z)
@@ -84,7 +89,9 @@ TEST(VoxelPlacement, SurfaceProbesLieInEmptyVoxelsNextToGeometry) {
         };
         glm::dvec3 lo, hi;
         box(x, y, z, lo, hi);
-        const bool inDomain = x >= 0 && y >= 0 && z >= 0;
+        const glm::dvec3 centre = 0.5 * (lo + hi);  // probes stay inside the scene bounds
+        const bool inDomain = centre.x >= blo.x && centre.y >= blo.y && centre.z >= blo.z &&
+                              centre.x <= bhi.x && centre.y <= bhi.y && centre.z <= bhi.z;
         const bool holds = voxelHoldsGeometry(scene, lo, hi);
         bool touches = false;
         for (int dz = -1; dz <= 1 && !touches; ++dz)
@@ -150,7 +157,7 @@ TEST(VoxelPlacement, DeterministicAcrossThreads) {
   const PlacedProbes b = placeVoxelProbes(scene, opt);
   EXPECT_EQ(a.positions, b.positions);
   EXPECT_EQ(a.kinds, b.kinds);
-  EXPECT_GT(a.count(ProbeKind::kFiller), 0u);
+  EXPECT_GT(a.count(ProbeKind::kSurface), 0u);
 }
 
 TEST(VoxelPlacement, RejectsBadOptionsAndEmptyScenes) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 namespace tetraprobe {
@@ -74,7 +75,20 @@ FillerResult addSliverFillers(
     // still remove slivers the kept points did not; a plain Delaunay mesh if TetGen adds points anyway.
     tg.maxSteiner = 0;
     TetGenResult final = tetrahedralizeTetGen(probes.positions, tg);
-    r.mesh = final.steiner.empty() ? std::move(final.mesh) : delaunay(probes.positions, options.backend);
+    TetMesh mesh =
+        final.steiner.empty() ? std::move(final.mesh) : delaunay(probes.positions, options.backend);
+    const MeshQuality q = meshQuality(probes.positions, mesh);
+    if (q.worstMinDihedralDeg < r.before.worstMinDihedralDeg) {  // never worse: undo
+      const size_t n = probes.size() - r.added;
+      probes.positions.resize(n);
+      probes.kinds.resize(n);
+      probes.spacing.resize(n);
+      r.rejected += r.added;
+      r.added = 0;
+      r.after = r.before;
+      return r;
+    }
+    r.mesh = std::move(mesh);
     r.after = meshQuality(probes.positions, r.mesh);
     return r;
   }
@@ -82,7 +96,12 @@ FillerResult addSliverFillers(
   r.after = r.before;
   for (int round = 0; round < options.rounds; ++round) {
     PlacedProbes candidates;
-    for (const auto& t : r.mesh.tets) {
+    for (size_t ti = 0; ti < r.mesh.tets.size(); ++ti) {
+      const auto& t = r.mesh.tets[ti];
+      // A sliver with a hull face covers a concavity of the probe cloud: a point inside it only splits it
+      // into more flat tets, so only interior slivers get candidates.
+      const auto& nb = r.mesh.neighbours[ti];
+      if (std::find(nb.begin(), nb.end(), -1) != nb.end()) continue;
       const glm::dvec3 p0 = probes.positions[size_t(t[0])], p1 = probes.positions[size_t(t[1])],
                        p2 = probes.positions[size_t(t[2])], p3 = probes.positions[size_t(t[3])];
       const TetQuality q = tetQuality(p0, p1, p2, p3);
@@ -105,6 +124,12 @@ FillerResult addSliverFillers(
       }
       double spacing = 0.0;
       for (int i = 0; i < 4; ++i) spacing += 0.25 * probes.spacing[size_t(t[size_t(i)])];
+      if (options.snapToLattice && spacing > 0.0) {
+        // Voxel placement puts probes on the lattice spacing * Z^3; a sliver there marks a hole in the
+        // lattice, which the nearest lattice point fills with lattice-shaped tets.
+        const glm::dvec3 snapped = glm::round(candidate / spacing) * spacing;
+        if (glm::distance(snapped, centroid) <= longest) candidate = snapped;
+      }
       candidates.add(candidate, ProbeKind::kFiller, spacing);
     }
     if (candidates.size() == 0) break;

@@ -70,7 +70,7 @@ struct HashGrid {
 
 bool insideByRays(int rays, int hits, int backHits) {
   if (rays <= 0) return false;
-  return backHits * 4 > rays || (hits * 16 >= rays && backHits * 10 >= hits * 9);
+  return backHits * 4 > rays || (backHits * 16 >= rays && backHits * 2 > hits);
 }
 
 PushOutStats pushOutProbes(PlacedProbes& probes, const ClearanceQuery& query) {

@@ -159,10 +159,13 @@ PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& o
   g.spacing = s;
   g.top = 0;
   while (g.top < 20 && g.edge(g.top + 1) <= options.maxSpacing * (1.0 + 1e-9)) ++g.top;
-  g.origin = lo - glm::dvec3(s);
+  // Voxel centres on the world lattice spacing * Z^3, so geometry on whole-spacing planes (metre-aligned
+  // walls, floors) lies in the middle of a voxel rather than on the face between two; the first voxel layer
+  // lies outside the bounds.
+  g.origin = (glm::floor(lo / s) - 1.5) * s;
   const int64_t topCell = int64_t(1) << g.top;
   for (int a = 0; a < 3; ++a) {
-    const double n = std::ceil((hi[a] - lo[a] + 2.0 * s) / s);
+    const double n = std::ceil((hi[a] + s - g.origin[a]) / s);
     if (!(n <= double(kMaxCellsPerAxis)))
       throw InputError("voxel placement: the level spans " + metres(hi[a] - lo[a]) + " on axis " +
                        std::to_string(a) + ", more than 2^20 voxels of " + metres(s) +
@@ -201,7 +204,15 @@ PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& o
   sortUnique(geometry);
 
   PlacedProbes out;
-  const glm::dvec3 keepLo = lo - glm::dvec3(s), keepHi = hi + glm::dvec3(s);
+  // Probes stay inside the level's bounds (a probe outside a closed level only sees the backs of its walls;
+  // outside an open one there is nothing to light), each axis grown to at least two spacings so that a flat
+  // level (a lone floor) still gets the probes above it.
+  glm::dvec3 keepLo = lo, keepHi = hi;
+  for (int a = 0; a < 3; ++a) {
+    const double grow = std::max(0.0, s - 0.5 * (hi[a] - lo[a]));
+    keepLo[a] -= grow;
+    keepHi[a] += grow;
+  }
   auto inDomain = [&](const glm::dvec3& p) {
     return p.x >= keepLo.x && p.y >= keepLo.y && p.z >= keepLo.z && p.x <= keepHi.x && p.y <= keepHi.y &&
            p.z <= keepHi.z;
@@ -324,6 +335,7 @@ PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& o
           nearGeometry = contains(geometry, pack(q.x, q.y, q.z));
         }
     const glm::dvec3 clo = g.origin + glm::dvec3(c) * s;
+    if (!inDomain(g.centre(k, 0))) continue;
     if (nearGeometry) {
       budget(1);
       out.add(g.centre(k, 0), ProbeKind::kSurface, s);

@@ -20,6 +20,8 @@ struct FillerOptions {
   int rounds = 3;                 // CGAL: re-tetrahedralizations at most
   double tetgenRadiusEdge = 1.4;  // TetGen: radius-edge bound of the refinement (slivers pass any bound;
                                   // a tight one adds points where they would form)
+  bool snapToLattice = true;      // move each candidate to the nearest point of the lattice
+                                  // (local spacing) * Z^3 when that stays near the tet (voxel placement)
   double minDistance = 0.5;       // a candidate closer than this x its spacing to a probe (or an earlier
                                   // candidate) is skipped
 };
@@ -32,17 +34,19 @@ struct FillerResult {
   int rounds = 0;
 };
 
-// CGAL: tetrahedralize; for every tet with min dihedral < minDihedralDeg take its circumcentre, or its
-// centroid when the circumcentre lies farther than the tet's longest edge from the centroid; skip candidates
-// within minDistance x max(local spacings) of a probe or an earlier candidate (mergeProbes' rule); `inside`
-// (may be empty) rejects the rest that are in geometry; append and re-tetrahedralize, for at most `rounds`
-// rounds or until a round adds nothing; a round that makes the worst min dihedral worse (or leaves it and
-// does not reduce the sliver count) is undone and ends the loop, so `after` is never worse than `before`. The
-// candidate's spacing is the mean spacing of the tet's corners. TetGen: one TetGen Delaunay + quality
-// refinement (q with tetgenRadiusEdge / minDihedralDeg, hull kept); the Steiner points are the candidates
-// (same inside/near filtering); the final mesh is TetGen's refinement of all kept probes without Steiner
-// points (flips only: valid, positively oriented, not necessarily Delaunay). Deterministic. Throws what the
-// tetrahedralizers throw.
+// CGAL: tetrahedralize; for every interior tet (no hull face: hull slivers cover concavities of the probe
+// cloud, and a point inside them only makes more) with min dihedral < minDihedralDeg take its circumcentre,
+// or its centroid when the circumcentre lies farther than the tet's longest edge from the centroid; skip
+// candidates within minDistance x max(local spacings) of a probe or an earlier candidate (mergeProbes' rule);
+// `inside` (may be empty) rejects the rest that are in geometry; append and re-tetrahedralize, for at most
+// `rounds` rounds or until a round adds nothing; a round that makes the worst min dihedral worse (or leaves
+// it and does not reduce the sliver count) is undone and ends the loop, so `after` is never worse than
+// `before`. The candidate's spacing is the mean spacing of the tet's corners. TetGen: one TetGen Delaunay +
+// quality refinement (q with tetgenRadiusEdge / minDihedralDeg, hull kept); the Steiner points are the
+// candidates (same inside/near filtering); the final mesh is TetGen's refinement of all kept probes without
+// Steiner points (flips only: valid, positively oriented, not necessarily Delaunay); when its worst min
+// dihedral is below that of the plain Delaunay mesh, the fillers are dropped again. Deterministic. Throws
+// what the tetrahedralizers throw.
 FillerResult addSliverFillers(
     PlacedProbes& probes, const FillerOptions& options,
     const std::function<std::vector<uint8_t>(const std::vector<glm::dvec3>&)>& inside);

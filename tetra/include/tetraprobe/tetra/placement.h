@@ -57,19 +57,21 @@ struct VoxelPlacementOptions {
 };
 
 // The octree, flattened into levels L = 0..Lmax with cell edge h_L = spacing * 2^L, Lmax the largest L with
-// h_L <= maxSpacing (at least 0). The domain is the scene bounds grown by one spacing, cells aligned to its
-// min corner. A level-0 voxel "holds geometry" when a triangle overlaps the closed voxel box (exact SAT,
-// Akenine-Moller 2001). A level-L cell (L >= 1) is split when it holds geometry, is within one level-L cell
-// (26-neighbourhood) of a cell that does, or overlaps a fine volume. Probes go at the centres of:
-//   - level-0 empty voxels (children of split level-1 cells) that touch a geometry voxel: kSurface;
+// h_L <= maxSpacing (at least 0). Level-0 voxel centres lie on the world lattice spacing * Z^3 (so
+// whole-spacing walls run through voxel middles, not along voxel faces); the domain covers the scene bounds
+// grown by one spacing, whole top cells from the voxel at floor(min / spacing) - 1. A level-0 voxel "holds
+// geometry" when a triangle overlaps the closed voxel box (exact SAT, Akenine-Moller 2001). A level-L cell (L
+// >= 1) is split when it holds geometry, is within one level-L cell (26-neighbourhood) of a cell that does,
+// or overlaps a fine volume. Probes go at the centres of:
+//   - level-0 empty voxels that touch a geometry voxel (26-neighbourhood): kSurface;
 //   - level-0 empty voxels inside a fine volume that are not next to geometry: kVolume;
 //   - empty leaf cells of level L >= 1 (unsplit children of split cells, or unsplit top cells): kOpen;
-// Probes whose centre lies outside the scene bounds grown by one spacing are dropped (top cells are padded
-// to whole cells). Then the filler lattice (kFiller): points of a fillerSpacing lattice over the domain with
-// no other probe within fillerSpacing / 2 and not in a geometry voxel. Deterministic (sorted sparse sets, no
-// hashing order). Cost O(triangle-voxel overlaps + probes). Throws InputError for a scene without triangles,
-// spacing <= 0 or non-finite, maxSpacing < spacing, negative fillerSpacing, a domain above 2^20 voxels per
-// axis, or more than maxProbes probes.
+// Probes outside the level's bounds (scene and fine volumes; each axis grown to at least 2 x spacing) are
+// dropped: outside a closed level a probe sees only the backs of walls. Then the filler lattice (kFiller):
+// points of a fillerSpacing lattice over the domain with no other probe within fillerSpacing / 2 and not in a
+// geometry voxel. Deterministic (sorted sparse sets, no hashing order). Cost O(triangle-voxel overlaps +
+// probes). Throws InputError for a scene without triangles, spacing <= 0 or non-finite, maxSpacing < spacing,
+// negative fillerSpacing, a domain above 2^20 voxels per axis, or more than maxProbes probes.
 PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& options);
 
 // Triangle / axis-aligned box overlap (separating axis test). Closed box [lo, hi]. Exposed for tests.
@@ -91,8 +93,10 @@ struct Clearance {
 };
 // The inside rule both the pipeline and the tests apply to `rays` uniformly distributed rays of which `hits`
 // hit something and `backHits` hit a back face: inside when backHits > 25 % of the rays (Unity APV), or when
-// at least 1/16 of the rays hit and 90 % of those hits are back faces (a probe outside a closed level sees
-// only the backs of its walls, over less than a quarter of the sphere at corners).
+// at least 1/16 of the rays hit back faces and back faces are the majority of the hits (a probe outside a
+// closed level sees mostly the backs of its walls, at its corners over less than a quarter of the sphere; a
+// probe in open space that mostly sees the back of a single-sided card is caught too, and pushed out or
+// rejected).
 bool insideByRays(int rays, int hits, int backHits);
 
 // Batch query: one Clearance per point, rays reaching `reach` metres (hits beyond count as escapes).
