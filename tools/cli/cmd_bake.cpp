@@ -19,8 +19,22 @@ int cmdBake(int argc, char** argv) {
       "SCENE is a .gltf/.glb, .obj or .scene.json file (docs/scene_format.md).",
       {{"--output", "-o", "LEVEL.tpb", "level file to write", ""},
        {"--report", "", "FILE.json", "also write a JSON report of the bake", ""},
-       {"--spacing", "", "METRES", "probe grid spacing", "1"},
-       {"--probes", "", "FILE.csv", "use these probes (x,y,z a line) instead of the grid", ""},
+       {"--spacing", "", "METRES",
+        "finest probe spacing (voxel edge near geometry and in fine volumes; grid step)", "1"},
+       {"--probes", "", "FILE.csv",
+        "user probes (x,y,z a line), kept exactly: alone they are the only probes; with --placement they are "
+        "added to the automatic ones (automatic probes near them are dropped)",
+        ""},
+       {"--placement", "", "voxel|grid|none",
+        "voxel: probes in empty voxels next to geometry, coarser cells in open space, filler probes; grid: a "
+        "regular grid (for comparison); none: only --probes",
+        "voxel"},
+       {"--max-spacing", "", "METRES", "voxel: coarsest open-space cell", "10"},
+       {"--filler-spacing", "", "METRES", "voxel: open-space filler lattice (0 = none)", "4"},
+       {"--tetra", "", "cgal|tetgen",
+        "tetrahedralizer: CGAL Delaunay + circumcentre fillers at slivers, or TetGen Delaunay + quality "
+        "refinement whose Steiner points become fillers",
+        "cgal"},
        {"--bounces", "", "N", "diffuse bounces after the first hit", "2"},
        {"--samples", "", "N", "paths per probe", "256"},
        {"--content", "", "default|all",
@@ -48,6 +62,21 @@ int cmdBake(int argc, char** argv) {
   opt.spacing = args.number("--spacing");
   if (!(opt.spacing > 0.0)) throw UsageError("--spacing must be positive");
   opt.probesCsv = args.str("--probes");
+  opt.placement =
+      args.has("--placement") ? args.str("--placement") : (opt.probesCsv.empty() ? "voxel" : "none");
+  if (opt.placement != "voxel" && opt.placement != "grid" && opt.placement != "none")
+    throw UsageError("--placement must be voxel, grid or none, not '" + opt.placement + "'");
+  if (opt.placement == "none" && opt.probesCsv.empty())
+    throw UsageError("--placement none needs --probes FILE.csv");
+  if (opt.placement == "grid" && !opt.probesCsv.empty())
+    throw UsageError("--placement grid does not take --probes (use voxel or none)");
+  opt.maxSpacing = args.number("--max-spacing");
+  if (!(opt.maxSpacing >= opt.spacing)) throw UsageError("--max-spacing must be at least --spacing");
+  opt.fillerSpacing = args.number("--filler-spacing");
+  if (!(opt.fillerSpacing >= 0.0)) throw UsageError("--filler-spacing must be >= 0");
+  opt.tetra = args.str("--tetra");
+  if (opt.tetra != "cgal" && opt.tetra != "tetgen")
+    throw UsageError("--tetra must be cgal or tetgen, not '" + opt.tetra + "'");
   opt.importShCsv = args.str("--import-sh");
   if (!opt.probesCsv.empty() && !opt.importShCsv.empty())
     throw UsageError("--probes and --import-sh both give the probes; use one");
@@ -107,12 +136,20 @@ int cmdBake(int argc, char** argv) {
   if (stats.importedProbes)
     std::printf("  probes  %zu (imported with their SH, from %s)\n", level.probes.size(),
                 opt.importShCsv.c_str());
-  else if (stats.userProbes)
+  else if (opt.placement == "none")
     std::printf("  probes  %zu (user, from %s)\n", level.probes.size(), opt.probesCsv.c_str());
+  else if (opt.placement == "voxel")
+    std::printf(
+        "  probes  %zu (voxel %.3g..%.3g m: %zu surface, %zu volume, %zu open, %zu filler (%zu at "
+        "slivers), %zu user; %zu rejected, %zu pushed, %zu merged)\n",
+        level.probes.size(), opt.spacing, opt.maxSpacing, stats.surfaceProbes, stats.volumeProbes,
+        stats.openProbes, stats.fillerProbes, stats.sliverFillers, stats.userProbes, stats.rejectedProbes,
+        stats.pushedProbes, stats.mergedProbes);
   else
     std::printf("  probes  %zu (grid %.3g m: %zu placed, %zu inside geometry rejected)\n",
                 level.probes.size(), opt.spacing, stats.gridProbes, stats.rejectedProbes);
-  std::printf("  tets    %zu\n", level.tets.size());
+  std::printf("  tets    %zu (%s), worst min dihedral %.3g deg (%.3g before fillers)\n", level.tets.size(),
+              opt.tetra.c_str(), stats.minDihedral, stats.minDihedralBeforeFiller);
   if (!stats.importedProbes)
     std::printf("  rays    %llu (%.3g Mrays/s)\n", (unsigned long long)stats.bake.rays(),
                 stats.bake.raysPerSecond() * 1e-6);
@@ -138,16 +175,30 @@ int cmdBake(int argc, char** argv) {
                     {"samples", opt.bake.samplesPerProbe},
                     {"content", content},
                     {"seed", opt.bake.seed},
-                    {"placement", !opt.importShCsv.empty() ? "imported"
-                                  : opt.probesCsv.empty()  ? "grid"
-                                                           : "user"},
+                    {"placement", !opt.importShCsv.empty()  ? "imported"
+                                  : opt.placement == "none" ? "user"
+                                                            : opt.placement},
+                    {"max_spacing", opt.maxSpacing},
+                    {"filler_spacing", opt.fillerSpacing},
+                    {"tetra", opt.tetra},
                     {"sh_order", opt.bake.shOrder},
                     {"dering", dering}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},
-                   {"rejected", stats.rejectedProbes}};
-    j["tets"] = {{"count", level.tets.size()}};
+                   {"rejected", stats.rejectedProbes},
+                   {"surface", stats.surfaceProbes},
+                   {"volume", stats.volumeProbes},
+                   {"open", stats.openProbes},
+                   {"filler", stats.fillerProbes},
+                   {"filler_at_slivers", stats.sliverFillers},
+                   {"pushed", stats.pushedProbes},
+                   {"merged", stats.mergedProbes}};
+    j["tets"] = {{"count", level.tets.size()},
+                 {"min_dihedral_deg", stats.minDihedral},
+                 {"min_dihedral_deg_before_filler", stats.minDihedralBeforeFiller},
+                 {"quality_histogram", {{"bin_deg", 5}, {"min_dihedral", stats.dihedralHistogram}}},
+                 {"outer_cells", level.outerCells.size()}};
     j["sh"] = {{"order", opt.bake.shOrder},
                {"deringed_probes", stats.dering.deringedProbes},
                {"unfixable_probes", stats.dering.unfixableProbes},

@@ -3,13 +3,18 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <sstream>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/common/parallel.h"
 #include "tetraprobe/runtime/outer_cells.h"
+#include "tetraprobe/tetra/filler.h"
 #include "tetraprobe/tetra/placement.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
@@ -43,6 +48,45 @@ std::string deringName(const DeringOptions& d) {
   return s.str();
 }
 
+// Clearance of probe positions (tetra/placement.h) from 64 rays of a fixed spherical Fibonacci set each:
+// hits and back-face hits for insideByRays(), escape = mean direction of rays that escaped or hit a front
+// face beyond `reach`, nearest hit and the side it faces. Per point, so any thread count gives the same.
+ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
+  return [&tracer, threads](const std::vector<glm::dvec3>& pts, const std::vector<double>& reach) {
+    constexpr int kRays = 64;
+    std::vector<glm::vec3> dirs;
+    const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
+    for (int i = 0; i < kRays; ++i) {
+      const double z = 1.0 - (i + 0.5) * 2.0 / kRays, r = std::sqrt(1.0 - z * z);
+      dirs.emplace_back(float(r * std::cos(golden * i)), float(r * std::sin(golden * i)), float(z));
+    }
+    std::vector<Clearance> out(pts.size());
+    parallelFor(
+        pts.size(), threads,
+        [&](size_t i) {
+          FlushDenormalsScope ftz;
+          Clearance& c = out[i];
+          int hits = 0, back = 0;
+          glm::dvec3 escape(0.0);
+          for (const glm::vec3& d : dirs) {
+            const Hit h =
+                tracer.intersect(glm::vec3(pts[i]), d, 0.0f, std::numeric_limits<float>::infinity());
+            hits += h.hit;
+            back += h.hit && !h.frontFace;
+            if (!h.hit || (h.frontFace && double(h.t) > reach[i])) escape += glm::dvec3(d);
+            if (h.hit && double(h.t) < c.nearest) {
+              c.nearest = double(h.t);
+              c.away = glm::dvec3(h.frontFace ? h.geometricNormal : -h.geometricNormal);
+            }
+          }
+          c.inside = insideByRays(kRays, hits, back);
+          if (glm::length(escape) > 0.0) c.escape = glm::normalize(escape);
+        },
+        64);
+    return out;
+  };
+}
+
 }  // namespace
 
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats) {
@@ -51,6 +95,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   timer.mark("bvh");
 
   std::vector<glm::dvec3> probes;
+  std::optional<TetMesh> voxelMesh;  // voxel placement tetrahedralizes with its fillers
   ProbeShTable imported;
   if (!options.importShCsv.empty()) {
     if (!options.probesCsv.empty())
@@ -58,9 +103,56 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     imported = readShCsv(options.importShCsv);
     probes = imported.positions;
     stats.importedProbes = stats.userProbes = probes.size();
-  } else if (!options.probesCsv.empty()) {
+  } else if (options.placement == "none") {
+    if (options.probesCsv.empty()) throw InputError("placement 'none' needs user probes (--probes FILE.csv)");
     probes = readProbeCsv(options.probesCsv);
     stats.userProbes = probes.size();
+  } else if (options.placement == "voxel") {
+    // User probes first (kept exactly), then the adaptive voxel probes; push-out, merge.
+    PlacedProbes placed;
+    if (!options.probesCsv.empty())
+      for (const glm::dvec3& p : readProbeCsv(options.probesCsv))
+        placed.add(p, ProbeKind::kUser, options.spacing);
+    stats.userProbes = placed.size();
+    VoxelPlacementOptions vo;
+    vo.spacing = options.spacing;
+    vo.maxSpacing = options.maxSpacing;
+    vo.fillerSpacing = options.fillerSpacing;
+    vo.threads = options.bake.threads;
+    const PlacedProbes voxel = placeVoxelProbes(scene, vo);
+    for (size_t i = 0; i < voxel.size(); ++i)
+      placed.add(voxel.positions[i], voxel.kinds[i], voxel.spacing[i]);
+    stats.gridProbes = voxel.size();
+    const ClearanceQuery clearance = tracerClearance(tracer, options.bake.threads);
+    const PushOutStats push = pushOutProbes(placed, clearance);
+    stats.rejectedProbes = push.rejected;
+    stats.pushedProbes = push.pushed;
+    stats.mergedProbes = mergeProbes(placed, 0.1);
+    timer.mark("place");
+    if (placed.size() < 4)
+      throw InputError("only " + std::to_string(placed.size()) +
+                       " probe(s) left after voxel placement (need at least 4 that are not all coplanar)");
+    FillerOptions fo;
+    fo.backend = options.tetra == "tetgen" ? TetraBackend::kTetGen : TetraBackend::kCgal;
+    const FillerResult filled = addSliverFillers(placed, fo, [&](const std::vector<glm::dvec3>& pts) {
+      const std::vector<Clearance> c = clearance(pts, std::vector<double>(pts.size(), options.spacing));
+      std::vector<uint8_t> in(pts.size());
+      for (size_t i = 0; i < pts.size(); ++i) in[i] = c[i].inside || c[i].nearest < 0.05 * options.spacing;
+      return in;
+    });
+    stats.sliverFillers = filled.added;
+    stats.minDihedralBeforeFiller = filled.before.worstMinDihedralDeg;
+    stats.minDihedral = filled.after.worstMinDihedralDeg;
+    stats.dihedralHistogram.assign(filled.after.minDihedralHistogram.begin(),
+                                   filled.after.minDihedralHistogram.end());
+    stats.surfaceProbes = placed.count(ProbeKind::kSurface);
+    stats.volumeProbes = placed.count(ProbeKind::kVolume);
+    stats.openProbes = placed.count(ProbeKind::kOpen);
+    stats.fillerProbes = placed.count(ProbeKind::kFiller);
+    voxelMesh = filled.mesh;
+    probes = std::move(placed.positions);
+  } else if (options.placement != "grid") {
+    throw InputError("unknown placement '" + options.placement + "' (voxel, grid or none)");
   } else {
     glm::vec3 lo, hi;
     sceneBounds(scene, lo, hi);
@@ -74,7 +166,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       if (!inside[i]) probes.push_back(grid[i]);
     stats.rejectedProbes = grid.size() - probes.size();
   }
-  timer.mark("place");
+  if (!voxelMesh) timer.mark("place");
   if (probes.size() < 4) {
     std::ostringstream msg;
     msg << "only " << probes.size() << " probe(s) left after placement (need at least 4 that are not all "
@@ -83,7 +175,15 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     throw InputError(msg.str());
   }
 
-  const TetMesh mesh = tetrahedralizeDelaunay(probes);
+  TetMesh mesh;
+  if (voxelMesh) {
+    mesh = std::move(*voxelMesh);  // tetrahedralized with the fillers
+  } else {
+    mesh = options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
+    const MeshQuality q = meshQuality(probes, mesh);
+    stats.minDihedralBeforeFiller = stats.minDihedral = q.worstMinDihedralDeg;
+    stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
+  }
   timer.mark("tetrahedralize");
 
   Level level;
@@ -115,13 +215,13 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
 
   std::ostringstream gen;
   gen << "tetraprobe 0.1.0 bake; placement="
-      << (!options.importShCsv.empty() ? "imported"
-          : options.probesCsv.empty()  ? "grid"
-                                       : "user")
-      << "; spacing=" << options.spacing << "; bounces=" << options.bake.bounces
-      << "; samples=" << options.bake.samplesPerProbe << "; content=" << contentName(options.bake.content)
-      << "; seed=" << options.bake.seed << "; sh_order=" << options.bake.shOrder
-      << "; dering=" << deringName(options.dering);
+      << (!options.importShCsv.empty()  ? "imported"
+          : options.placement == "none" ? "user"
+                                        : options.placement)
+      << "; tetra=" << options.tetra << "; spacing=" << options.spacing
+      << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
+      << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
+      << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering);
   level.generator = gen.str();
   return level;
 }

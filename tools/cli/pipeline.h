@@ -14,11 +14,18 @@
 namespace tetraprobe::cli {
 
 struct PipelineOptions {
-  double spacing = 1.0;     // grid spacing, metres
-  std::string probesCsv;    // user probes instead of the grid (kept exactly)
+  double spacing = 1.0;     // finest voxel / grid spacing, metres
+  std::string probesCsv;    // user probes (kept exactly; never moved or merged away)
   std::string importShCsv;  // probes and their SH from another baker (bake/sh_csv.h); no path tracing
   BakeOptions bake;         // bake.shOrder 1 also truncates imported SH
   DeringOptions dering;     // applied to baked and imported SH alike
+
+  // Placement (tetra/placement.h): "voxel" (adaptive voxels + push-out + merge + fillers; the default),
+  // "grid" (regular grid, inside probes rejected; for comparison), "none" (user probes only).
+  std::string placement = "voxel";
+  double maxSpacing = 10.0;    // voxel: coarsest open-space cell, metres
+  double fillerSpacing = 4.0;  // voxel: open-space filler lattice, metres (0 = none)
+  std::string tetra = "cgal";  // "cgal" | "tetgen"
 };
 
 struct PipelineStats {
@@ -28,6 +35,15 @@ struct PipelineStats {
   size_t importedProbes = 0;  // --import-sh
   BakeStats bake;             // rays and time of the path tracer (zero when the SH were imported)
   DeringStats dering;
+
+  // Placement by kind (voxel placement; counts after push-out and merge) and tet quality.
+  size_t surfaceProbes = 0, volumeProbes = 0, openProbes = 0, fillerProbes = 0;  // filler: lattice + sliver
+  size_t sliverFillers = 0;  // of fillerProbes, added where tets were slivers
+  size_t pushedProbes = 0;   // moved out of geometry or off a surface
+  size_t mergedProbes = 0;   // dropped as near-coincident (tolerance 0.1 x local spacing)
+  double minDihedralBeforeFiller = 0.0, minDihedral = 0.0;  // worst tet, degrees
+  std::vector<uint64_t> dihedralHistogram;                  // tets per 5-degree bin of min dihedral
+
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };
 
