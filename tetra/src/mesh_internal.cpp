@@ -71,23 +71,25 @@ void validatePoints(const std::vector<glm::dvec3>& points, const std::string& wh
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw InputError(who + ": probe " + std::to_string(i) + " has a non-finite coordinate " + describe(p));
   }
-  // Exact duplicates, found by a lexicographic sort of the indices (O(n log n); stable so the lower index of
-  // a duplicate pair comes first).
-  std::vector<int32_t> order(points.size());
-  std::iota(order.begin(), order.end(), 0);
-  auto less = [&](int32_t a, int32_t b) {
-    const glm::dvec3 &p = points[size_t(a)], &q = points[size_t(b)];
+  // Exact duplicates, found by a lexicographic sort of contiguous (x, y, z, index) records (O(n log n); ties
+  // by index, so the lowest index of a duplicate group comes first).
+  struct Entry {
+    double x, y, z;
+    int32_t index;
+  };
+  std::vector<Entry> order(points.size());
+  for (size_t i = 0; i < points.size(); ++i) order[i] = {points[i].x, points[i].y, points[i].z, int32_t(i)};
+  std::sort(order.begin(), order.end(), [](const Entry& p, const Entry& q) {
     if (p.x != q.x) return p.x < q.x;
     if (p.y != q.y) return p.y < q.y;
-    return p.z < q.z;
-  };
-  std::stable_sort(order.begin(), order.end(), less);
+    if (p.z != q.z) return p.z < q.z;
+    return p.index < q.index;
+  });
   for (size_t k = 1; k < order.size(); ++k) {
-    if (points[size_t(order[k - 1])] == points[size_t(order[k])]) {
-      const int32_t a = std::min(order[k - 1], order[k]), b = std::max(order[k - 1], order[k]);
-      throw InputError(who + ": probes " + std::to_string(a) + " and " + std::to_string(b) +
-                       " are at the same position " + describe(points[size_t(a)]));
-    }
+    const Entry &p = order[k - 1], &q = order[k];
+    if (p.x == q.x && p.y == q.y && p.z == q.z)
+      throw InputError(who + ": probes " + std::to_string(p.index) + " and " + std::to_string(q.index) +
+                       " are at the same position " + describe(points[size_t(p.index)]));
   }
 }
 
@@ -101,18 +103,24 @@ TetMesh finalizeMesh(const std::vector<glm::dvec3>& points, std::vector<RawTet> 
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
-  std::vector<uint64_t> key(raw.size());
+  // Sorted as contiguous (key, tuple, index) records rather than through an index array: same order, far
+  // fewer cache misses on millions of tets.
+  struct SortKey {
+    uint64_t key;
+    std::array<int32_t, 4> v;
+    int32_t index;
+  };
+  std::vector<SortKey> keys(raw.size());
   for (size_t k = 0; k < raw.size(); ++k) {
     glm::dvec3 c(0.0);
     for (int32_t v : raw[k].v) c += points[size_t(v)];
-    key[k] = mortonKey(0.25 * c, lo, hi);
+    keys[k] = {mortonKey(0.25 * c, lo, hi), raw[k].v, int32_t(k)};
   }
+  std::sort(keys.begin(), keys.end(),
+            [](const SortKey& a, const SortKey& b) { return a.key != b.key ? a.key < b.key : a.v < b.v; });
   std::vector<int32_t> order(raw.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
-    const size_t ia = size_t(a), ib = size_t(b);
-    return key[ia] != key[ib] ? key[ia] < key[ib] : raw[ia].v < raw[ib].v;
-  });
+  for (size_t k = 0; k < keys.size(); ++k) order[k] = keys[k].index;
+  keys = {};
   std::vector<int32_t> newIndex(raw.size());
   for (size_t k = 0; k < order.size(); ++k) newIndex[size_t(order[k])] = int32_t(k);
 
