@@ -9,7 +9,8 @@
 //
 // Outside the hull (a walk leaving through a hull face whose plane the point is beyond, decided from the
 // probe positions in double, not the rows) the walk continues across the outer cells (outer_cells.h) to the
-// cell whose extruded hull triangle holds the point, so the outside answer is continuous and path-independent.
+// cell whose extruded hull triangle holds the point, so the outside answer is continuous and
+// path-independent.
 #include "tetraprobe/runtime/query.h"
 
 #include "tetraprobe/runtime/outer_cells.h"
@@ -312,8 +313,10 @@ StartGrid buildStartGrid(const Level& level) {
 
 }  // namespace
 
-ProbeQuery::ProbeQuery(const Level& level) : level_(level), grid_(buildStartGrid(level)) {
+ProbeQuery::ProbeQuery(const Level& level, float cellSize, int threads)
+    : level_(level), grid_(buildStartGrid(level)) {
   if (level.outerCells.empty() && !level.tets.empty()) ownCells_ = buildOuterCells(level.probes, level.tets);
+  cells_ = buildCellGrid(level.probes, level.tets, cellSize, threads);
 }
 
 // Walks the outer cells from `startCell` to the one whose extruded triangle holds x: each step crosses the
@@ -367,18 +370,15 @@ Location ProbeQuery::bruteForceLocate(const glm::dvec3& world) const {
   return loc.inside ? loc : outerScan(x, loc);
 }
 
-Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
-  if (level_.tets.empty()) return Location{};
-  const glm::dvec3 x = sanitize(world - level_.origin, grid_);
+// The walk from `hint` (short budget, if valid), else from `start` (full budget), else the scans; leaving the
+// hull continues across the outer cells.
+Location ProbeQuery::walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const {
   Location loc;
-  // A hint gets a short budget (a stale hint from an object that moved far should not cost a long walk),
-  // then the start grid gets the full one, then the O(tets) scan.
   const std::vector<Tet>& tets = level_.tets;
   int32_t exitFace = -1;
   if (!(hint >= 0 && size_t(hint) < tets.size() &&
         walk(tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace)) &&
-      !walk(tets, level_.probes, x, grid_.startTet[size_t(gridCell(grid_, x))], kMaxWalkSteps, loc,
-            &exitFace)) {
+      !walk(tets, level_.probes, x, start, kMaxWalkSteps, loc, &exitFace)) {
     loc = scanAll(level_, x);
     return loc.inside ? loc : outerScan(x, loc);
   }
@@ -386,6 +386,40 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   // Outside the hull: continue across the outer cells from the face the walk left through.
   const int32_t cell = findOuterCell(outerCells(), loc.tet, exitFace);
   return cell >= 0 ? outerLocate(x, cell) : loc;
+}
+
+Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
+  if (level_.tets.empty()) return Location{};
+  const glm::dvec3 x = sanitize(world - level_.origin, grid_);
+  if (hint >= 0 && size_t(hint) < level_.tets.size()) {
+    // A per-object hint first: its short walk usually ends at once (Unity-style caching).
+    Location loc;
+    int32_t exitFace = -1;
+    if (walk(level_.tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace) && exitFace < 0) return loc;
+  }
+  // The cell grid's leaf: the tet among its few that holds x best starts the walk (which stops at once when
+  // it holds x, and otherwise steps to the neighbour or out to the outer cells).
+  int32_t count = 0;
+  const int32_t* leaf = cellGridLeaf(cells_, x, &count);
+  int32_t start = -1;
+  double bestMin = -std::numeric_limits<double>::infinity();
+  for (int32_t i = 0; i < count; ++i) {
+    double w[4];
+    tetWeights(level_.tets[size_t(leaf[i])], x, w);
+    const double m = w[minIndex(w)];
+    if (m > bestMin) {
+      bestMin = m;
+      start = leaf[i];
+    }
+  }
+  if (start < 0) start = grid_.startTet[size_t(gridCell(grid_, x))];
+  return walkFrom(x, start, -1);
+}
+
+Location ProbeQuery::walkLocate(const glm::dvec3& world) const {
+  if (level_.tets.empty()) return Location{};
+  const glm::dvec3 x = sanitize(world - level_.origin, grid_);
+  return walkFrom(x, grid_.startTet[size_t(gridCell(grid_, x))], -1);
 }
 
 glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache) const {

@@ -9,6 +9,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
 
 namespace tetraprobe {
@@ -36,14 +37,24 @@ struct Location {
 
 class ProbeQuery {
  public:
-  // Keeps a reference to `level` (which must outlive the query) and builds its acceleration data.
-  explicit ProbeQuery(const Level& level);
+  // Keeps a reference to `level` (which must outlive the query) and builds its acceleration data: the start
+  // grid, the outer cells when the level carries none, and the cell grid + BSP with cells of `cellSize`
+  // metres (on up to `threads` threads, 0 = all cores; the result does not depend on it).
+  explicit ProbeQuery(const Level& level, float cellSize = 16.0f, int threads = 0);
 
   // Locates a world-space point. `hint` is a tet to start from (for example the tet of the same object
   // last frame), or -1. Outside the probe hull the walk continues across the outer cells (outer_cells.h) to
   // the one whose extruded triangle holds the point: a continuous answer that does not depend on the hint or
   // the walk's path (up to 1e-6 in the weights where two cells share the point).
+  //
+  // Without a hint (or when the hint's short walk fails) the start tet comes from the sparse cell grid's BSP
+  // (cell_grid.h): the leaf's tets are checked exactly and the best one starts the walk, which then usually
+  // stops at once.
   Location locate(const glm::dvec3& world, int32_t hint = -1) const;
+
+  // The same answer found the previous way, by a walk from the coarse start grid's tet (no cell grid): for
+  // benchmarks and tests.
+  Location walkLocate(const glm::dvec3& world) const;
 
   // Reference answer for tests and the walk's fallback: scans every tet (O(tets)) and returns the one whose
   // smallest weight is largest (ties: lowest index), clamped and renormalized as locate() does; when that
@@ -61,6 +72,7 @@ class ProbeQuery {
 
   const Level& level() const { return level_; }
   const StartGrid& startGrid() const { return grid_; }
+  const CellGrid& cellGrid() const { return cells_; }
   // The level's outer cells, or the ones built on construction when the level carries none.
   const std::vector<OuterCell>& outerCells() const {
     return ownCells_.empty() ? level_.outerCells : ownCells_;
@@ -68,11 +80,13 @@ class ProbeQuery {
 
  private:
   Location outerLocate(const glm::dvec3& x, int32_t startCell) const;
+  Location walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const;
   Location outerScan(const glm::dvec3& x, const Location& fallback) const;
 
   const Level& level_;
   StartGrid grid_;
   std::vector<OuterCell> ownCells_;
+  CellGrid cells_;
 };
 
 }  // namespace tetraprobe

@@ -1,0 +1,321 @@
+// The sparse cell grid + BSP (runtime/cell_grid.h) as ProbeQuery::locate uses it: agreement with an exact
+// scan on over ten million queries (random, on faces, edges and vertices, just outside and far outside the
+// hull), the hash table's probe bound, and the tree's invariants.
+#include "tetraprobe/runtime/cell_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
+
+#include <glm/geometric.hpp>
+
+#include "test_levels.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+namespace {
+
+const glm::dvec3 kOrigin(4000.0, -150.0, 2500.0);
+
+Level ballLevel() {
+  std::mt19937_64 rng(41);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<glm::dvec3> pts;
+  for (int k = 0; k < 600; ++k) {
+    const glm::dvec3 d = glm::normalize(glm::dvec3(n(rng), n(rng), n(rng)));
+    pts.push_back(kOrigin + 12.0 * std::cbrt(u(rng)) * d);
+  }
+  return test::makeLevel(pts, kOrigin, 6);
+}
+
+Level boxLevel() {
+  auto pts = test::randomBoxPoints(500, 42, {-20, -4, -9}, {22, 5, 12});
+  for (auto& p : pts) p += kOrigin;
+  return test::makeLevel(pts, kOrigin, 7);
+}
+
+Level latticeLevel() {  // a regular lattice: cospherical everywhere, queries on shared faces galore
+  std::vector<glm::dvec3> pts;
+  for (int z = 0; z < 5; ++z)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 7; ++x) pts.push_back(kOrigin + glm::dvec3(x, y, z) * 3.0);
+  return test::makeLevel(pts, kOrigin + glm::dvec3(9.0, 4.5, 6.0), 8);
+}
+
+// The exact reference: every tet whose bounding box holds x (from a uniform bucket grid built here, not the
+// code under test) weighed in double from its rows, the best (largest smallest weight, ties lowest index)
+// taken; when none holds x within 1e-6, ProbeQuery::bruteForceLocate (every tet, then every outer cell).
+class ExactScan {
+ public:
+  ExactScan(const Level& level, const ProbeQuery& query) : level_(level), query_(query) {
+    lo_ = glm::dvec3(1e300);
+    hi_ = glm::dvec3(-1e300);
+    for (const glm::vec3& p : level.probes) {
+      lo_ = glm::min(lo_, glm::dvec3(p));
+      hi_ = glm::max(hi_, glm::dvec3(p));
+    }
+    step_ = (hi_ - lo_) / double(kDim) + 1e-9;
+    buckets_.resize(size_t(kDim * kDim * kDim));
+    for (size_t t = 0; t < level.tets.size(); ++t) {
+      glm::dvec3 a(1e300), b(-1e300);
+      for (int i = 0; i < 4; ++i) {
+        a = glm::min(a, glm::dvec3(level.probes[size_t(level.tets[t].v[i])]));
+        b = glm::max(b, glm::dvec3(level.probes[size_t(level.tets[t].v[i])]));
+      }
+      const glm::ivec3 c0 = cell(a - 1e-4), c1 = cell(b + 1e-4);
+      for (int z = c0.z; z <= c1.z; ++z)
+        for (int y = c0.y; y <= c1.y; ++y)
+          for (int x = c0.x; x <= c1.x; ++x)
+            buckets_[size_t(x + kDim * (y + kDim * z))].push_back(int32_t(t));
+    }
+  }
+
+  Location locate(const glm::dvec3& world) const {
+    const glm::dvec3 x = world - level_.origin;
+    int32_t best = -1;
+    double bestMin = -1e300, bestW[4] = {};
+    if (x.x >= lo_.x && x.y >= lo_.y && x.z >= lo_.z && x.x <= hi_.x && x.y <= hi_.y && x.z <= hi_.z) {
+      const glm::ivec3 c = cell(x);
+      for (int32_t t : buckets_[size_t(c.x + kDim * (c.y + kDim * c.z))]) {
+        const Tet& tet = level_.tets[size_t(t)];
+        double w[4];
+        for (int i = 0; i < 3; ++i)
+          w[i] = double(tet.row[i][0]) * x.x + double(tet.row[i][1]) * x.y + double(tet.row[i][2]) * x.z +
+                 double(tet.row[i][3]);
+        w[3] = 1.0 - w[0] - w[1] - w[2];
+        const double m = *std::min_element(w, w + 4);
+        if (m > bestMin || (m == bestMin && t < best)) {
+          best = t;
+          bestMin = m;
+          std::copy(w, w + 4, bestW);
+        }
+      }
+    }
+    if (best < 0 || bestMin < -1e-6) {
+      // Outside every tet: the full scan of tets and outer cells on every 64th such point, the walk from the
+      // start grid (a path that does not use the cell grid) on the others.
+      return ++outsideCount_ % 64 == 0 ? query_.bruteForceLocate(world) : query_.walkLocate(world);
+    }
+    Location loc;
+    loc.tet = best;
+    loc.inside = true;
+    double sum = 0.0;
+    for (double& w : bestW) sum += (w = std::max(w, 0.0));
+    for (int i = 0; i < 4; ++i) loc.weights[i] = float(bestW[i] / sum);
+    return loc;
+  }
+
+ private:
+  static constexpr int kDim = 24;
+  glm::ivec3 cell(const glm::dvec3& x) const {
+    glm::ivec3 c;
+    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor((x[a] - lo_[a]) / step_[a])), 0, kDim - 1);
+    return c;
+  }
+  const Level& level_;
+  const ProbeQuery& query_;
+  glm::dvec3 lo_, hi_, step_;
+  std::vector<std::vector<int32_t>> buckets_;
+  mutable size_t outsideCount_ = 0;
+};
+
+// How far two correct answers may differ: 1e-6 when both are inside tets (float weights); 1e-5 when both are
+// outer cells (a cell accepts a point within 1e-6 of its edges, where its neighbour's weights differ by that
+// much times the cells' slopes); otherwise (a point on a hull face, or in a float gap between sliver faces
+// that no tet's rows claim) the tets' float rows decide, as in OuterCells.ContinuousAcrossHullBoundary: their
+// slope times their rounding.
+double tolerance(const Level& level, const Location& a, const Location& b, const glm::dvec3& world) {
+  if (a.inside && b.inside) return 1e-6;
+  double slope = 0.0;
+  for (const Location* loc : {&a, &b}) {
+    if (loc->outerCell >= 0) continue;
+    const Tet& tet = level.tets[size_t(loc->tet)];
+    glm::dvec3 sum(0.0);
+    for (int r = 0; r < 3; ++r) {
+      const glm::dvec3 g(tet.row[r][0], tet.row[r][1], tet.row[r][2]);
+      slope = std::max(slope, glm::length(g));
+      sum += g;
+    }
+    slope = std::max(slope, glm::length(sum));
+  }
+  return 1e-5 + slope * 4.0 * 1.2e-7 * (glm::length(world - level.origin) + 1.0);
+}
+
+// Largest difference between two answers' probe weights (the same interpolation whichever of two tets sharing
+// the point is named).
+double weightDifference(const Level& level, const Location& a, const Location& b) {
+  if (a.tet == b.tet) {
+    double d = 0.0;
+    for (int i = 0; i < 4; ++i) d = std::max(d, double(std::abs(a.weights[i] - b.weights[i])));
+    return d;
+  }
+  std::map<int32_t, double> m;
+  for (int i = 0; i < 4; ++i) {
+    m[level.tets[size_t(a.tet)].v[i]] += a.weights[i];
+    m[level.tets[size_t(b.tet)].v[i]] -= b.weights[i];
+  }
+  double d = 0.0;
+  for (const auto& [p, w] : m) d = std::max(d, std::abs(w));
+  return d;
+}
+
+struct Tally {
+  size_t queries = 0, inside = 0;
+};
+
+// Runs `count` queries from `make` through locate() and the exact reference; every answer must agree.
+template <typename Make>
+void compare(const Level& level, const ProbeQuery& q, const ExactScan& ref, size_t count, Make make,
+             const char* what, Tally& tally) {
+  for (size_t k = 0; k < count; ++k) {
+    const glm::dvec3 x = make(k);
+    const Location got = q.locate(x), want = ref.locate(x);
+    ++tally.queries;
+    tally.inside += got.inside;
+    ASSERT_GE(got.tet, 0);
+    const double d = weightDifference(level, got, want);
+    ASSERT_LE(d, tolerance(level, got, want, x))
+        << what << " query " << k << " at local (" << (x - level.origin).x << ", " << (x - level.origin).y
+        << ", " << (x - level.origin).z << "): grid tet " << got.tet << " (outer " << got.outerCell
+        << "), reference tet " << want.tet << " (outer " << want.outerCell << ")";
+  }
+}
+
+// Over ten million queries in all, on three levels with the default 16 m cells and with 2 m cells (many
+// cells, so the hash table and cell borders are exercised): the grid + BSP locate gives the exact scan's
+// interpolation everywhere: to 1e-6 in every probe weight inside the hull (see tolerance() for the rest).
+TEST(CellGrid, AgreesWithExactScanOnTenMillionQueries) {
+  size_t total = 0;
+  for (int which = 0; which < 3; ++which) {
+    const Level level = which == 0 ? ballLevel() : which == 1 ? boxLevel() : latticeLevel();
+    for (float cellSize : {16.0f, 2.0f}) {
+      const ProbeQuery q(level, cellSize, 2);
+      const ExactScan ref(level, q);
+      glm::dvec3 lo(1e300), hi(-1e300);
+      for (const glm::vec3& p : level.probes) {
+        lo = glm::min(lo, glm::dvec3(p));
+        hi = glm::max(hi, glm::dvec3(p));
+      }
+      const glm::dvec3 ext = hi - lo;
+      std::mt19937_64 rng(uint64_t(100 + which * 10) + uint64_t(cellSize));
+      std::uniform_real_distribution<double> u(0.0, 1.0);
+      std::normal_distribution<double> n(0.0, 1.0);
+      Tally tally;
+      // Random in the bounds (grown by 5 %: inside and just around the hull).
+      compare(
+          level, q, ref, 1'200'000,
+          [&](size_t) {
+            return level.origin + lo - 0.05 * ext + 1.1 * ext * glm::dvec3(u(rng), u(rng), u(rng));
+          },
+          "random", tally);
+      // On tet vertices, edges and faces (exactly representable or within rounding of them).
+      std::uniform_int_distribution<size_t> anyTet(0, level.tets.size() - 1);
+      compare(
+          level, q, ref, 450'000,
+          [&](size_t k) {
+            const Tet& t = level.tets[anyTet(rng)];
+            glm::dvec3 p[4];
+            for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(t.v[i])]);
+            const double a = u(rng), b = u(rng) * (1.0 - a);
+            switch (k % 3) {
+              case 0:
+                return level.origin + p[k % 4];
+              case 1:
+                return level.origin + a * p[0] + (1.0 - a) * p[(k / 3) % 3 + 1];
+              default:
+                return level.origin + a * p[1] + b * p[2] + (1.0 - a - b) * p[3];
+            }
+          },
+          "face/edge/vertex", tally);
+      // Just outside (within 1 % of the size beyond the bounds) and far outside (100 m to 10 km).
+      compare(
+          level, q, ref, 20'000,
+          [&](size_t k) {
+            const glm::dvec3 d = glm::normalize(glm::dvec3(n(rng), n(rng), n(rng)));
+            const double r =
+                k % 2 ? 0.5 * glm::length(ext) * (1.0 + 0.01 * u(rng)) : 100.0 * std::pow(100.0, u(rng));
+            return level.origin + 0.5 * (lo + hi) + r * d;
+          },
+          "outside", tally);
+      total += tally.queries;
+      std::printf(
+          "level %d, %g m cells: %zu cells in %zu slots (probe bound %u), %zu nodes, depth max %d mean %.1f; "
+          "%zu queries, %zu inside\n",
+          which, double(cellSize),
+          size_t(std::count_if(q.cellGrid().slots.begin(), q.cellGrid().slots.end(),
+                               [](const CellSlot& s) { return s.key[0] != INT32_MIN; })),
+          q.cellGrid().slots.size(), q.cellGrid().maxProbe, q.cellGrid().nodes.size(), q.cellGrid().maxDepth,
+          q.cellGrid().meanDepth, tally.queries, tally.inside);
+    }
+  }
+  EXPECT_GE(total, size_t(10'000'000));
+}
+
+// The hash table keeps its stated bound, is at most half full, and every stored cell is found.
+TEST(CellGrid, HashProbeBoundHolds) {
+  const Level level = boxLevel();
+  for (float cellSize : {16.0f, 1.0f, 0.5f}) {
+    const CellGrid g = buildCellGrid(level.probes, level.tets, cellSize, 1);
+    EXPECT_LE(g.maxProbe, kMaxCellProbe);
+    size_t used = 0;
+    for (const CellSlot& s : g.slots) used += s.key[0] != INT32_MIN;
+    EXPECT_LE(2 * used, g.slots.size());
+    for (const CellSlot& s : g.slots) {
+      if (s.key[0] == INT32_MIN) continue;
+      const glm::dvec3 centre =
+          glm::dvec3(g.min) + (glm::dvec3(s.key[0], s.key[1], s.key[2]) + 0.5) * double(cellSize);
+      int32_t count = -1;
+      cellGridLeaf(g, centre, &count);
+      EXPECT_GE(count, 0);
+    }
+    // Far away: absent, no tets, no crash (also for non-finite input).
+    int32_t count = -1;
+    EXPECT_EQ(cellGridLeaf(g, glm::dvec3(1e7), &count), nullptr);
+    EXPECT_EQ(count, 0);
+    cellGridLeaf(g, glm::dvec3(std::nan(""), 0.0, 0.0), &count);
+    EXPECT_EQ(count, 0);
+  }
+}
+
+// Threads only split the work: the grid is the same for any thread count.
+TEST(CellGrid, DeterministicForAnyThreadCount) {
+  const Level level = ballLevel();
+  const CellGrid a = buildCellGrid(level.probes, level.tets, 4.0f, 1);
+  for (int threads : {2, 3, 8}) {
+    const CellGrid b = buildCellGrid(level.probes, level.tets, 4.0f, threads);
+    ASSERT_EQ(a.nodes.size(), b.nodes.size());
+    EXPECT_EQ(std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BspNode)), 0);
+    EXPECT_EQ(a.leafTets, b.leafTets);
+    ASSERT_EQ(a.slots.size(), b.slots.size());
+    EXPECT_EQ(std::memcmp(a.slots.data(), b.slots.data(), a.slots.size() * sizeof(CellSlot)), 0);
+  }
+}
+
+// Every tet a point lies in is in that point's leaf (the tree never drops a tet a query needs).
+TEST(CellGrid, LeafHoldsContainingTet) {
+  const Level level = latticeLevel();
+  const CellGrid g = buildCellGrid(level.probes, level.tets, 2.0f, 1);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
+    for (int s = 0; s < 20; ++s) {
+      double w[4], sum = 0.0;
+      for (double& x : w) sum += (x = u(rng) + 1e-3);
+      glm::dvec3 x(0.0);
+      for (int i = 0; i < 4; ++i) x += (w[i] / sum) * p[i];
+      int32_t count = 0;
+      const int32_t* leaf = cellGridLeaf(g, x, &count);
+      ASSERT_TRUE(std::find(leaf, leaf + count, int32_t(t)) != leaf + count) << "tet " << t;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tetraprobe
