@@ -205,6 +205,17 @@ TEST(PushOut, NoProbeInsideClosedBoxWalls) {
   }
 }
 
+// The inside rule, literally: APV's 25 % of back-face hits, or back faces the majority of the hits once at
+// least 1/16 of the rays hit them (outside a closed level), and nothing for a few stray back hits.
+TEST(PushOut, InsideRuleCases) {
+  EXPECT_TRUE(insideByRays(64, 64, 17));   // > 25 % back
+  EXPECT_FALSE(insideByRays(64, 64, 16));  // exactly 25 %, back faces a minority of the hits
+  EXPECT_TRUE(insideByRays(64, 10, 10));   // outside a closed room's corner: few hits, all back
+  EXPECT_FALSE(insideByRays(64, 3, 3));    // three stray back hits
+  EXPECT_FALSE(insideByRays(64, 40, 0));   // an ordinary room probe
+  EXPECT_FALSE(insideByRays(0, 0, 0));
+}
+
 // User probes are never moved, even inside geometry; the others are.
 TEST(PushOut, UserProbesAreNeverMoved) {
   Scene scene;
