@@ -68,10 +68,10 @@ struct VoxelPlacementOptions {
 //   - empty leaf cells of level L >= 1 (unsplit children of split cells, or unsplit top cells): kOpen;
 // Probes outside the level's bounds (scene and fine volumes; each axis grown to at least 2 x spacing) are
 // dropped: outside a closed level a probe sees only the backs of walls. Then the filler lattice (kFiller):
-// points of a fillerSpacing lattice over the domain with no other probe within fillerSpacing / 2 and not in a
-// geometry voxel. Deterministic (sorted sparse sets, no hashing order). Cost O(triangle-voxel overlaps +
-// probes). Throws InputError for a scene without triangles, spacing <= 0 or non-finite, maxSpacing < spacing,
-// negative fillerSpacing, a domain above 2^20 voxels per axis, or more than maxProbes probes.
+// points of a fillerSpacing lattice centred in that probe box with no other probe within fillerSpacing / 2
+// and not in a geometry voxel. Deterministic (sorted sparse sets, no hashing order). Cost O(triangle-voxel
+// overlaps + probes). Throws InputError for a scene without triangles, spacing <= 0 or non-finite, maxSpacing
+// < spacing, negative fillerSpacing, a domain above 2^20 voxels per axis, or more than maxProbes probes.
 PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& options);
 
 // Triangle / axis-aligned box overlap (separating axis test). Closed box [lo, hi]. Exposed for tests.

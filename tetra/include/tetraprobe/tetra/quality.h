@@ -16,7 +16,8 @@ struct TetQuality {
   double minDihedralDeg = 0.0;  // smallest of the six interior dihedral angles, degrees (regular: 70.53)
   double radiusEdge = 0.0;      // circumradius / shortest edge (regular: 0.612; slivers can stay low!)
   // Condition number of the barycentric matrix A = [P0-P3 | P1-P3 | P2-P3] in the Frobenius norm,
-  // ||A|| ||A^-1|| / 3 (1 for a regular tet with P3 at the apex; grows without bound as the tet flattens).
+  // ||A|| ||A^-1|| / 3: 1 for a right-angled corner tet with equal legs at P3, sqrt(13.5) / 3 = 1.22 for a
+  // regular tet; grows without bound as the tet flattens.
   // Infinity for a degenerate tet.
   double condition = 0.0;
 };
