@@ -129,3 +129,26 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
 }
 
 }  // namespace tetraprobe
+
+namespace tetraprobe {
+
+LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion) {
+  auto query = std::make_shared<ProbeQuery>(level);
+  const uint64_t bytes = level.probes.size() * (sizeof(glm::vec3) + sizeof(ShRgb)) +
+                         level.tets.size() * sizeof(Tet) + occlusion->bytes();
+  const Level* lv = &level;
+  return {"tet+occlusion", bytes, [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
+            const Location loc = query->locate(p);
+            if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
+            const Tet& t = lv->tets[size_t(loc.tet)];
+            const glm::vec3 local(p - lv->origin);
+            const glm::vec4 w =
+                applyOcclusion(loc.weights, occlusionVisibility(*lv, *occlusion, loc.tet, local, n));
+            const ShRgb* probes[4] = {&lv->sh[size_t(t.v[0])], &lv->sh[size_t(t.v[1])],
+                                      &lv->sh[size_t(t.v[2])], &lv->sh[size_t(t.v[3])]};
+            const float weights[4] = {w.x, w.y, w.z, w.w};
+            return shIrradiance(shBlend(probes, weights, 4), n);
+          }};
+}
+
+}  // namespace tetraprobe

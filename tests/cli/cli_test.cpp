@@ -116,7 +116,8 @@ const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 1
 
 // Every command answers --help with usage on stdout and exit 0.
 TEST_F(Cli, HelpExitsZeroForEveryCommand) {
-  for (const char* c : {"bake", "inspect", "query", "render", "eval"}) {
+  for (const char* c :
+       {"bake", "inspect", "query", "render", "eval", "diff", "reference", "export-sh", "bench"}) {
     const CliRun r = run(std::string(c) + " --help");
     EXPECT_EQ(r.code, 0) << c << ": " << r.err;
     EXPECT_NE(r.out.find("usage: tetraprobe"), std::string::npos) << c;
@@ -239,4 +240,48 @@ TEST_F(Cli, SampleLitRoomBrighterThanDarkRoom) {
   ASSERT_EQ(std::sscanf(b.out.c_str(), "%f,%f,%f", &br, &bg, &bb), 3);
   EXPECT_GT(ag, 3.0f * bg) << "lit room " << ag << " vs dark room " << bg;
   EXPECT_GT(bg, 0.0f) << "light reaches the dark room through the doorway";
+}
+
+// SH exchange with an engine's own baker: export a level's probes, import them into a new bake with deringing
+// off, and the new level's probes and SH are the same bytes (positions and coefficients survive the CSV
+// exactly).
+TEST_F(Cli, ExportThenImportShRoundTripsTheProbes) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  ASSERT_EQ(
+      run("bake " + path("box.obj").string() + " --samples 32 --dering none -o " + path("a.tpb").string())
+          .code,
+      0);
+  const CliRun ex = run("export-sh " + path("a.tpb").string() + " -o " + path("sh.csv").string());
+  ASSERT_EQ(ex.code, 0) << ex.err;
+  const CliRun im = run("bake " + path("box.obj").string() + " --import-sh " + path("sh.csv").string() +
+                        " --dering none -o " + path("b.tpb").string());
+  ASSERT_EQ(im.code, 0) << im.err;
+  const CliRun ex2 = run("export-sh " + path("b.tpb").string() + " -o " + path("sh2.csv").string());
+  ASSERT_EQ(ex2.code, 0) << ex2.err;
+  EXPECT_EQ(slurp(path("sh.csv")), slurp(path("sh2.csv")));
+}
+
+// The reference oracle is reproducible whatever the thread count, prints r,g,b plus standard errors per
+// line, and below a ceiling light sees more light facing up than facing down.
+TEST_F(Cli, ReferenceIsDeterministicAcrossThreadCounts) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  write("pts.csv", "2,0.001,2,0,1,0\n2,2.9,2,0,-1,0\n0.001,1.5,2,1,0,0\n");
+  const std::string base = "reference " + path("box.obj").string() + " --points " + path("pts.csv").string() +
+                           " --rel-error 0.05 --max-samples 4096";
+  const CliRun a = run(base + " --threads 1");
+  const CliRun b = run(base + " --threads 2");
+  ASSERT_EQ(a.code, 0) << a.err;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_EQ(lineCount(a.out), 3);
+  float v[2][6];
+  std::istringstream in(a.out);
+  std::string line;
+  for (int i = 0; i < 2 && std::getline(in, line); ++i)
+    ASSERT_EQ(std::sscanf(line.c_str(), "%f,%f,%f,%f,%f,%f", &v[i][0], &v[i][1], &v[i][2], &v[i][3], &v[i][4],
+                          &v[i][5]),
+              6)
+        << line;
+  EXPECT_GT(v[0][1], v[1][1]) << "floor facing the light vs ceiling facing down";
 }

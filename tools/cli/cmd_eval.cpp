@@ -5,23 +5,31 @@
 #include "commands.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/evaluate.h"
+#include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
 
 int cmdEval(int argc, char** argv) {
-  Args args("tetraprobe eval SCENE LEVEL.tpb [options]",
-            "Path-traces reference irradiance at random surface points (same light content as the level)\n"
-            "and compares each lookup method with it. Error measures are defined in docs/evaluation.md.",
-            {{"--points", "", "N", "random surface points", "512"},
-             {"--samples", "", "N", "reference paths per point", "4096"},
-             {"--bounces", "", "N", "reference path depth (ground truth, independent of the bake)", "8"},
-             {"--seed", "", "N", "random seed for points and paths", "1"},
-             {"--threads", "", "N", "worker threads, 0 = all cores", "0"},
-             {"--report", "", "FILE.json", "write the figures as JSON", ""},
-             {"--points-out", "", "FILE.csv",
-              "write every point: position, normal, reference, stderr, lookups", ""}});
+  Args args(
+      "tetraprobe eval SCENE LEVEL.tpb [options]",
+      "Path-traces reference irradiance at random surface points (same light content as the level)\n"
+      "and compares each lookup method with it. Error measures are defined in docs/evaluation.md.",
+      {{"--points", "", "N", "random surface points", "512"},
+       {"--samples", "", "N", "reference paths per point", "4096"},
+       {"--bounces", "", "N", "reference path depth (ground truth, independent of the bake)", "8"},
+       {"--seed", "", "N", "random seed for points and paths", "1"},
+       {"--threads", "", "N", "worker threads, 0 = all cores", "0"},
+       {"--occlusion", "", "auto|none|planes|shadow-maps",
+        "also score tet+occlusion, with occlusion data built from the scene in this mode (the level file "
+        "does not store it yet)",
+        "auto"},
+       {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
+        "0.98"},
+       {"--report", "", "FILE.json", "write the figures as JSON", ""},
+       {"--points-out", "", "FILE.csv", "write every point: position, normal, reference, stderr, lookups",
+        ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   EvalOptions opt;
@@ -40,14 +48,32 @@ int cmdEval(int argc, char** argv) {
 
   EvalReport report = computeReference(tracer, level.content, opt);
   for (const auto& m : standardMethods(level)) scoreMethod(report, m);
+  OcclusionStats occStats;
+  OcclusionMode occMode;
+  if (!parseOcclusionMode(args.str("--occlusion"), occMode))
+    throw UsageError("--occlusion must be auto, none, planes or shadow-maps");
+  if (occMode != OcclusionMode::kNone) {
+    OcclusionOptions occOpt;
+    occOpt.mode = occMode;
+    occOpt.minAgreement = args.number("--min-agreement");
+    occOpt.threads = opt.threads;
+    auto occlusion = std::make_shared<const LevelOcclusion>(buildOcclusion(tracer, level, occOpt, &occStats));
+    scoreMethod(report, occlusionMethod(level, occlusion));
+  }
 
   std::printf("tetraprobe eval: %zu points, %d paths each (%d bounces), mean relative stderr %.4f, %.1fs\n",
               report.points.size(), report.samplesPerPoint, report.referenceBounces, report.meanRelStderr,
               report.referenceSeconds);
-  std::printf("  %-10s %10s %14s %13s %10s %12s %12s\n", "method", "relmse", "mean_rel_err", "p95_rel_err",
+  if (occMode != OcclusionMode::kNone)
+    std::printf(
+        "  occlusion (%s): %zu tets with geometry: %zu none, %zu planes, %zu shadow maps; %zu bytes; "
+        "agreement %.3f\n",
+        occlusionModeName(occMode), occStats.tetsWithGeometry, occStats.none, occStats.planeTets,
+        occStats.shadowMapTets, occStats.bytes, occStats.agreement);
+  std::printf("  %-14s %10s %14s %13s %10s %12s %12s\n", "method", "relmse", "mean_rel_err", "p95_rel_err",
               "leak", "ns/query", "bytes");
   for (const auto& m : report.methods)
-    std::printf("  %-10s %10.4f %14.4f %13.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
+    std::printf("  %-14s %10.4f %14.4f %13.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
                 m.meanRelError, m.p95RelError, m.leak, m.cpuNsPerQuery, (unsigned long long)m.bytes);
 
   if (args.has("--points-out")) {
@@ -91,6 +117,13 @@ int cmdEval(int argc, char** argv) {
                           {"mean_rel_stderr", report.meanRelStderr},
                           {"seconds", report.referenceSeconds}}},
                         {"methods", methods}};
+    if (occMode != OcclusionMode::kNone)
+      j["occlusion"] = {{"mode", occlusionModeName(occMode)},
+                        {"none", occStats.none},
+                        {"planes", occStats.planeTets},
+                        {"shadow_maps", occStats.shadowMapTets},
+                        {"bytes", occStats.bytes},
+                        {"agreement", occStats.agreement}};
     writeJsonReport(args.str("--report"), j);
   }
   return 0;

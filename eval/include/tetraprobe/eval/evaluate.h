@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion.h"
 
 namespace tetraprobe {
 
@@ -71,5 +73,9 @@ void scoreMethod(EvalReport& report, const LookupMethod& method);
 
 // The standard methods for a level: `tet` (ProbeQuery) and `nearest` (nearest probe's SH).
 std::vector<LookupMethod> standardMethods(const Level& level);
+
+// `tet+occlusion`: the tet lookup with per-tet occlusion data (runtime/occlusion.h) dropping occluded probes.
+// Points outside the tets (outer cells, empty level) take the plain tet answer.
+LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion);
 
 }  // namespace tetraprobe
