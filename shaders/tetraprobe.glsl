@@ -7,8 +7,9 @@
 // - tetraprobeIrradiance(localPos, normal) returns irradiance E in W/m^2 (RGB). Lambertian outgoing radiance
 //   is albedo * E / pi. E can be slightly negative where the L2 projection rings; clamp if you need to.
 // - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: a walk from `hint` (a tet index, e.g. last
-//   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps), else from the start-grid cell holding
-//   localPos (clamped to the grid; at most tetraprobeMaxWalkSteps), else a scan of every tet. Each step
+//   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
+//   the middle tet of the sparse cell grid's BSP leaf holding localPos (else, for an absent cell, the
+//   start-grid cell's tet; at most tetraprobeMaxWalkSteps), else a scan of every tet. Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
@@ -20,8 +21,8 @@
 //   An empty level gives tet -1 and E = 0.
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
 //   rounding), outside too (the outer cells' answer does not depend on the hull face the walk leaves by).
-// - Bindings: the four read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
-//   TETRAPROBE_BINDING + 0..3 (defaults 0 and 0..3; define the macros before including to move them).
+// - Bindings: the five read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
+//   TETRAPROBE_BINDING + 0..4 (defaults 0 and 0..4; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
 //   (runtime/vulkan_upload.h).
 // - Including: the shader that includes this file needs `#extension GL_GOOGLE_include_directive : require`
@@ -372,6 +373,52 @@ void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
 #endif
 }
 
+// --- the sparse cell grid + BSP (runtime/cell_grid.h): the walk's start -------------------------------
+
+// tetraprobe::cellHash.
+uint tetraprobeCellHash(ivec3 k) {
+  uint h = uint(k.x) * 0x8DA6B343u ^ uint(k.y) * 0xD8163841u ^ uint(k.z) * 0xCB1AB31Fu;
+  h ^= h >> 16;
+  h *= 0x7FEB352Du;
+  h ^= h >> 15;
+  h *= 0x846CA68Bu;
+  h ^= h >> 16;
+  return h;
+}
+
+// The middle tet of the BSP leaf holding local point x, or -1 (no grid, cell absent, empty leaf).
+int tetraprobeCellStartTet(vec3 x) {
+  if (tetraprobeCellMaxProbe == 0u) return -1;
+  vec3 f = floor((x - tetraprobeCellMin) / tetraprobeCellSize);
+  if (!(all(greaterThanEqual(f, vec3(-2e9))) && all(lessThanEqual(f, vec3(2e9))))) return -1;  // also NaN
+  ivec3 key = ivec3(f);
+  uint h = tetraprobeCellHash(key) & tetraprobeCellSlotMask;
+  int node = 0;
+  bool found = false;
+  for (uint p = 0u; p < tetraprobeCellMaxProbe; ++p) {
+    int b = 4 * int(h);
+    if (tetraprobeCellData[b] == int(0x80000000u)) break;
+    if (tetraprobeCellData[b] == key.x && tetraprobeCellData[b + 1] == key.y && tetraprobeCellData[b + 2] == key.z) {
+      node = tetraprobeCellData[b + 3];
+      found = true;
+      break;
+    }
+    h = (h + 1u) & tetraprobeCellSlotMask;
+  }
+  if (!found) return -1;
+  for (int d = 0; d < 256 && node >= 0; ++d) {
+    int b = tetraprobeCellNodeOffset + 8 * node;
+    vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1], tetraprobeCellData[b + 2],
+                                   tetraprobeCellData[b + 3]));
+    precise float s = pl.x * x.x + pl.y * x.y + pl.z * x.z + pl.w;
+    node = tetraprobeCellData[b + 4 + (s >= 0.0 ? 1 : 0)];
+  }
+  if (node >= 0) return -1;
+  int leaf = tetraprobeCellLeafOffset - (node + 1);
+  int count = tetraprobeCellData[leaf];
+  return count > 0 ? tetraprobeCellData[leaf + 1 + count / 2] : -1;
+}
+
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
 // leave sliver faces' planes slightly apart) without any visited tet holding x within
 // TETRAPROBE_CYCLE_ACCEPT_EPS; a cycle otherwise answers with the visited tet holding x best. On false, `loc`
@@ -446,9 +493,13 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
   TetraprobeLocation loc;
   int exitFace = -1;
   // A hint gets a short budget, then the start grid the full one, then the scan.
-  bool walked = hint >= 0 && hint < tetraprobeTetCount &&
-                tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace);
-  if (!walked) walked = tetraprobeWalk(x, tetraprobeStartCellTet(x), tetraprobeMaxWalkSteps, loc, exitFace);
+  if (hint >= 0 && hint < tetraprobeTetCount && tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) &&
+      exitFace < 0)
+    return loc;
+  // The cell grid's leaf names the start (the coarse start grid where the cell is absent).
+  int start = tetraprobeCellStartTet(x);
+  if (start < 0) start = tetraprobeStartCellTet(x);
+  bool walked = tetraprobeWalk(x, start, tetraprobeMaxWalkSteps, loc, exitFace);
   if (!walked) {
 #ifndef TETRAPROBE_NO_SCAN_FALLBACK
     loc = tetraprobeScanAll(x);

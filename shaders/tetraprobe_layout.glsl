@@ -6,6 +6,7 @@
 //   TETRAPROBE_BINDING + 1  TetraprobeSh    27 floats per probe: coefficient-major, then r,g,b (tetraprobe::ShRgb)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
 //   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 128 bytes per cell
+//   TETRAPROBE_BINDING + 4  TetraprobeCells  the sparse cell grid + BSP: a 32-byte header, then int data
 // Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
 #ifndef TETRAPROBE_LAYOUT_GLSL
 #define TETRAPROBE_LAYOUT_GLSL
@@ -60,6 +61,20 @@ struct TetraprobeOuterCell {
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly buffer TetraprobeOuterCells {
   int tetraprobeOuterCellCount;                 // offset 0 (0: no outer cells, clamped hull-tet answers)
   TetraprobeOuterCell tetraprobeOuterCells[];  // offset 16
+};
+
+// The sparse cell grid + BSP (tetraprobe::GpuCellGridHeader, runtime/cell_grid.h). data[]: hash slots at 0
+// (4 ints: key x, y, z, root; key x = INT_MIN when empty), BSP nodes at tetraprobeCellNodeOffset (8 ints:
+// plane as float bits, child under, child over, 2 pad), leaves at tetraprobeCellLeafOffset (a count, then
+// tets). A root or child < 0 names the leaf at tetraprobeCellLeafOffset - (child + 1).
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly buffer TetraprobeCells {
+  vec3 tetraprobeCellMin;        // offset 0, local frame, metres
+  float tetraprobeCellSize;      // offset 12, metres
+  uint tetraprobeCellSlotMask;   // offset 16: slots - 1
+  uint tetraprobeCellMaxProbe;   // offset 20: longest probe sequence; 0 = no grid
+  int tetraprobeCellNodeOffset;  // offset 24
+  int tetraprobeCellLeafOffset;  // offset 28
+  int tetraprobeCellData[];      // offset 32
 };
 
 #endif  // TETRAPROBE_LAYOUT_GLSL

@@ -297,7 +297,7 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   VulkanLevelBuffers levelBuffers;
   std::string uploadError;
   if (uploadLevelBuffers(ctx.physicalDevice(), device, level, query.startGrid(), query.outerCells(),
-                         levelBuffers, &uploadError) != VK_SUCCESS)
+                         query.cellGrid(), levelBuffers, &uploadError) != VK_SUCCESS)
     throw std::runtime_error("render: level upload failed: " + uploadError);
   cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
 

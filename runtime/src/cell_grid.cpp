@@ -4,8 +4,10 @@
 //
 // Robustness: a tet goes to a child when any of its vertices lies within `margin` of that child's side of the
 // plane (evaluated in double from the float plane the query uses), so a query point within rounding of a
-// plane finds its tet on either side; the query then checks the leaf's tets exactly and finishes with the
-// walk (query.cpp), which makes the answer independent of the splits.
+// plane finds its tet on either side; the query starts the walk (query.cpp) from a leaf tet, which makes the
+// answer independent of the splits. A split is kept only when each child sheds at least a fifth of the
+// node's tets (kMaxChildShare): below about one tet per region every face plane straddles most of them, and
+// copying straddlers into both children would grow the tree without shrinking its leaves.
 #include "tetraprobe/runtime/cell_grid.h"
 
 #include <algorithm>
@@ -29,13 +31,19 @@ constexpr size_t kScoreSample = 256;  // tets a candidate is scored on, per node
 constexpr int64_t kMaxCellsPerTet =
     4096;  // a tet bigger than this many cells is kept to them (walk covers it)
 
-uint64_t mixKey(int32_t x, int32_t y, int32_t z) {
-  uint64_t h = uint64_t(uint32_t(x)) * 0x9E3779B97F4A7C15ull ^ uint64_t(uint32_t(y)) * 0xC2B2AE3D27D4EB4Full ^
-               uint64_t(uint32_t(z)) * 0x165667B19E3779F9ull;
-  h ^= h >> 29;
-  h *= 0xBF58476D1CE4E5B9ull;
-  return h ^ (h >> 32);
+}  // namespace
+
+uint32_t cellHash(int32_t x, int32_t y, int32_t z) {
+  uint32_t h = uint32_t(x) * 0x8DA6B343u ^ uint32_t(y) * 0xD8163841u ^ uint32_t(z) * 0xCB1AB31Fu;
+  h ^= h >> 16;
+  h *= 0x7FEB352Du;
+  h ^= h >> 15;
+  h *= 0x846CA68Bu;
+  h ^= h >> 16;
+  return h;
 }
+
+namespace {
 
 struct CellTree {  // one cell's tree, built apart and appended in cell order (deterministic with threads)
   std::vector<BspNode> nodes;
@@ -246,7 +254,7 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
     grid.maxProbe = 0;
     for (size_t c = 0; c < cellCount; ++c) {
       const int32_t* key = refs[cellStart[c]].key;
-      size_t h = size_t(mixKey(key[0], key[1], key[2])) & (capacity - 1);
+      size_t h = size_t(cellHash(key[0], key[1], key[2])) & (capacity - 1);
       uint32_t probe = 1;
       while (grid.slots[h].key[0] != INT32_MIN) {
         h = (h + 1) & (capacity - 1);
@@ -272,7 +280,7 @@ const int32_t* cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int32_t* 
     key[a] = int32_t(f);
   }
   const size_t mask = grid.slots.size() - 1;
-  size_t h = size_t(mixKey(key[0], key[1], key[2])) & mask;
+  size_t h = size_t(cellHash(key[0], key[1], key[2])) & mask;
   int32_t node = 0;
   bool found = false;
   for (uint32_t probe = 0; probe < grid.maxProbe; ++probe, h = (h + 1) & mask) {

@@ -397,21 +397,14 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
     int32_t exitFace = -1;
     if (walk(level_.tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace) && exitFace < 0) return loc;
   }
-  // The cell grid's leaf: the tet among its few that holds x best starts the walk (which stops at once when
-  // it holds x, and otherwise steps to the neighbour or out to the outer cells).
+  // The cell grid's leaf names the walk's start; the walk decides the answer (so it does not depend on how
+  // the tree was split), stepping to the neighbour or out to the outer cells as needed.
   int32_t count = 0;
   const int32_t* leaf = cellGridLeaf(cells_, x, &count);
-  int32_t start = -1;
-  double bestMin = -std::numeric_limits<double>::infinity();
-  for (int32_t i = 0; i < count; ++i) {
-    double w[4];
-    tetWeights(level_.tets[size_t(leaf[i])], x, w);
-    const double m = w[minIndex(w)];
-    if (m > bestMin) {
-      bestMin = m;
-      start = leaf[i];
-    }
-  }
+  // Leaves hold the tets overlapping a region about one tet across, in index (Morton) order: the middle one
+  // is near the region's centre, and the walk from it takes a step or two. Checking every leaf tet would
+  // cost more than those steps.
+  int32_t start = count > 0 ? leaf[count / 2] : -1;
   if (start < 0) start = grid_.startTet[size_t(gridCell(grid_, x))];
   return walkFrom(x, start, -1);
 }

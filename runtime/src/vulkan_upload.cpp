@@ -3,6 +3,7 @@
 #include "tetraprobe/runtime/vulkan_upload.h"
 
 #include <algorithm>
+#include <climits>
 #include <cstring>
 #include <vector>
 
@@ -10,7 +11,7 @@ namespace tetraprobe {
 namespace {
 
 const char* bindingName(int i) {
-  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid", "outer cells"};
+  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid", "outer cells", "cell grid"};
   return kNames[i];
 }
 
@@ -66,7 +67,8 @@ void appendBytes(std::vector<char>& out, const T* data, size_t count) {
 
 VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
                             const StartGrid& grid, const std::vector<OuterCell>& outerCells,
-                            VulkanLevelBuffers& out, std::string* error, int32_t maxWalkSteps) {
+                            const CellGrid& cellGrid, VulkanLevelBuffers& out, std::string* error,
+                            int32_t maxWalkSteps) {
   out = VulkanLevelBuffers{};
   const size_t cells =
       size_t(std::max(grid.dims.x, 0)) * size_t(std::max(grid.dims.y, 0)) * size_t(std::max(grid.dims.z, 0));
@@ -111,6 +113,29 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     }
   }
 
+  // The cell grid: every root, child and leaf entry the shader follows, in range.
+  {
+    const auto nodeCount = int64_t(cellGrid.nodes.size()), leafInts = int64_t(cellGrid.leafTets.size());
+    const auto validLeaf = [&](int32_t code) {
+      const int64_t at = -(int64_t(code) + 1);
+      if (at < 0 || at >= leafInts) return false;
+      const int64_t count = cellGrid.leafTets[size_t(at)];
+      if (count < 0 || at + count >= leafInts) return false;
+      for (int64_t i = 1; i <= count; ++i)
+        if (cellGrid.leafTets[size_t(at + i)] < 0 || cellGrid.leafTets[size_t(at + i)] >= tetCount)
+          return false;
+      return true;
+    };
+    const auto validChild = [&](int32_t c) { return c >= 0 ? c < nodeCount : validLeaf(c); };
+    bool ok = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
+    for (const CellSlot& s : cellGrid.slots) ok = ok && (s.key[0] == INT32_MIN || validChild(s.root));
+    for (const BspNode& n : cellGrid.nodes) ok = ok && validChild(n.child[0]) && validChild(n.child[1]);
+    if (!ok) {
+      if (error) *error = "cell grid has an index out of range";
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
+  }
+
   std::vector<char> data[kGpuBindingCount];
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
   appendBytes(data[kGpuBindingSh], level.sh.data(), level.sh.size());
@@ -143,6 +168,17 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     g.link[3] = c.face;
     appendBytes(data[kGpuBindingOuterCells], &g, 1);
   }
+  GpuCellGridHeader cellHeader{};
+  for (int i = 0; i < 3; ++i) cellHeader.min[i] = cellGrid.min[i];
+  cellHeader.cellSize = cellGrid.cellSize;
+  cellHeader.slotMask = cellGrid.slots.empty() ? 0u : uint32_t(cellGrid.slots.size() - 1);
+  cellHeader.maxProbe = cellGrid.slots.empty() ? 0u : cellGrid.maxProbe;
+  cellHeader.nodeOffset = int32_t(4 * cellGrid.slots.size());
+  cellHeader.leafOffset = int32_t(4 * cellGrid.slots.size() + 8 * cellGrid.nodes.size());
+  appendBytes(data[kGpuBindingCells], &cellHeader, 1);
+  appendBytes(data[kGpuBindingCells], cellGrid.slots.data(), cellGrid.slots.size());
+  appendBytes(data[kGpuBindingCells], cellGrid.nodes.data(), cellGrid.nodes.size());
+  appendBytes(data[kGpuBindingCells], cellGrid.leafTets.data(), cellGrid.leafTets.size());
 
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physicalDevice, &props);

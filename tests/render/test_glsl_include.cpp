@@ -1,5 +1,5 @@
 // The engine-facing include compiles outside the renderer (a fragment shader) and its binding macros move
-// the four buffers where the engine asks.
+// the five buffers where the engine asks.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -31,14 +31,15 @@ std::set<std::pair<uint32_t, uint32_t>> descriptorSlots(const uint32_t* words, s
   return slots;
 }
 
-// TETRAPROBE_SET 2 / TETRAPROBE_BINDING 5 put tets, SH, grid and outer cells at set 2, bindings 5..8 (the
-// layout levelDescriptorBindings(stages, 5, ...) describes), and nothing else.
+// TETRAPROBE_SET 2 / TETRAPROBE_BINDING 5 put tets, SH, grid, outer cells and cell grid at set 2,
+// bindings 5..9 (the layout levelDescriptorBindings(stages, 5, ...) describes), and nothing else.
 TEST(GlslInclude, BindingMacrosMoveTheBuffers) {
   const auto slots = descriptorSlots(kSpirv_engine_include_frag, sizeof(kSpirv_engine_include_frag) / 4);
   const std::set<std::pair<uint32_t, uint32_t>> expected = {{2u, 5u + kGpuBindingTets},
                                                             {2u, 5u + kGpuBindingSh},
                                                             {2u, 5u + kGpuBindingGrid},
-                                                            {2u, 5u + kGpuBindingOuterCells}};
+                                                            {2u, 5u + kGpuBindingOuterCells},
+                                                            {2u, 5u + kGpuBindingCells}};
   EXPECT_EQ(slots, expected);
 }
 

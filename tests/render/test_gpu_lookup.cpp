@@ -127,9 +127,9 @@ glm::vec3 px3(const Image& im, size_t i) {
 // with some cancellation while catching any wrong tet, cell, weight, constant, coefficient order or band
 // factor. Outside the hull both continue across the outer cells, whose answer does not depend on the hull
 // face a walk leaves by, so a float/double tie in the walk can no longer change the answer there.
-TEST(GpuLookup, MatchesCpuQueryPerPixel) {
+void expectGpuMatchesCpu(float cellSize) {
   const Level level = makeLevel();
-  const ProbeQuery query(level);
+  const ProbeQuery query(level, cellSize);
   const RenderView view = makeView(RenderMode::kIrradiance, 960, 540);
   RenderResult r;
   RENDER_OR_SKIP(makeMesh(), level, query, view, r);
@@ -167,6 +167,15 @@ TEST(GpuLookup, MatchesCpuQueryPerPixel) {
   EXPECT_EQ(bad, 0);
   EXPECT_GT(inside, 1000) << "the scene must show plenty of geometry inside the probe hull";
   EXPECT_GT(outside, 1000) << "the scene must show plenty of geometry outside the probe hull";
+}
+
+TEST(GpuLookup, MatchesCpuQueryPerPixel) {
+  expectGpuMatchesCpu(16.0f);  // the default cell grid: one or two cells, a BSP in each
+}
+
+// Half-metre cells: hundreds of hash slots and cell borders crossing the view, absent cells outside the hull.
+TEST(GpuLookup, MatchesCpuQueryPerPixelWithSmallCells) {
+  expectGpuMatchesCpu(0.5f);
 }
 
 // Mode 1 is mode 0 times albedo / pi, pixel for pixel (same lookup; one multiply and one divide apart).

@@ -124,13 +124,18 @@ class ExactScan {
   mutable size_t outsideCount_ = 0;
 };
 
-// How far two correct answers may differ: 1e-6 when both are inside tets (float weights); 1e-5 when both are
+// How far two correct answers may differ: 1e-6 when both are inside tets (float weights), unless the point
+// lies on a face, edge or vertex two tets share: each tet's float rows then put it there only within their
+// rounding, and which of them the walk stops in depends on where it came from; 1e-5 when both are
 // outer cells (a cell accepts a point within 1e-6 of its edges, where its neighbour's weights differ by that
 // much times the cells' slopes); otherwise (a point on a hull face, or in a float gap between sliver faces
 // that no tet's rows claim) the tets' float rows decide, as in OuterCells.ContinuousAcrossHullBoundary: their
 // slope times their rounding.
 double tolerance(const Level& level, const Location& a, const Location& b, const glm::dvec3& world) {
-  if (a.inside && b.inside) return 1e-6;
+  const auto minWeight = [](const Location& l) {
+    return std::min({l.weights[0], l.weights[1], l.weights[2], l.weights[3]});
+  };
+  if (a.inside && b.inside && (a.tet == b.tet || (minWeight(a) > 1e-5f && minWeight(b) > 1e-5f))) return 1e-6;
   double slope = 0.0;
   for (const Location* loc : {&a, &b}) {
     if (loc->outerCell >= 0) continue;

@@ -1,8 +1,8 @@
 // The point-location accelerator of Valient (GDC 2014, Killzone Shadow Fall): a sparse grid of cubic cells
 // (16 m by default) found through a hash table, and in each occupied cell a BSP tree over the tets that
-// overlap it. Descending the tree names a short list of tets (a leaf) that holds every tet overlapping the
-// leaf's region; the query checks them exactly and finishes with the ordinary walk (query.cpp), so the
-// answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
+// overlap it. Descending the tree names a list of tets (a leaf) that holds every tet overlapping the leaf's
+// region (LeafHoldsContainingTet); ProbeQuery::locate starts the ordinary walk (query.cpp) from one of them,
+// so the answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
 #pragma once
 
 #include <cstdint>
@@ -50,6 +50,10 @@ struct CellGrid {
 };
 
 inline constexpr uint32_t kMaxCellProbe = 8;
+
+// The table's hash of cell coordinates (32-bit arithmetic, mirrored by tetraprobeCellHash in
+// shaders/tetraprobe.glsl): a slot search starts at cellHash(key) & (slots.size() - 1).
+uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 
 // Buckets `tets` (over `probes`, local frame) into cells of `cellSize` metres by their bounding boxes and
 // builds each cell's BSP: split planes are tet face planes, scored as Godot's LightmapGI does

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/sh.h"
 
@@ -18,7 +19,8 @@ enum GpuBinding : uint32_t {
   kGpuBindingSh = 1,          // TetraprobeSh: float[27 * probes] (ShRgb[], 108 bytes each)
   kGpuBindingGrid = 2,        // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
   kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
-  kGpuBindingCount = 4,
+  kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
+  kGpuBindingCount = 5,
 };
 
 // The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; vec4 row[3]; }`.
@@ -71,5 +73,25 @@ static_assert(sizeof(GpuOuterCell) == 128 && offsetof(GpuOuterCell, n) == 48 &&
                   offsetof(GpuOuterCell, v) == 96 && offsetof(GpuOuterCell, link) == 112,
               "TetraprobeOuterCell: std430 array stride 128");
 inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
+
+// Header of the TetraprobeCells buffer (32 bytes): the sparse cell grid + BSP of cell_grid.h. The int32
+// data[] that follows at offset 32 holds the hash slots (CellSlot, 4 ints each) from index 0, the BSP nodes
+// (BspNode, 8 ints each, planes as float bits) from nodeOffset and the leaf lists from leafOffset. A node
+// child < 0 names the leaf at data[leafOffset - (child + 1)]: a count, then that many tets.
+struct GpuCellGridHeader {
+  float min[3];        // vec3 tetraprobeCellMin, local frame, metres
+  float cellSize;      // float tetraprobeCellSize, metres
+  uint32_t slotMask;   // uint tetraprobeCellSlotMask: slots - 1
+  uint32_t maxProbe;   // uint tetraprobeCellMaxProbe: 0 = no grid (the walk starts from the start grid)
+  int32_t nodeOffset;  // int tetraprobeCellNodeOffset
+  int32_t leafOffset;  // int tetraprobeCellLeafOffset
+};
+static_assert(std::is_standard_layout_v<GpuCellGridHeader>);
+static_assert(sizeof(GpuCellGridHeader) == 32 && offsetof(GpuCellGridHeader, cellSize) == 12 &&
+                  offsetof(GpuCellGridHeader, slotMask) == 16 &&
+                  offsetof(GpuCellGridHeader, leafOffset) == 28,
+              "TetraprobeCells header: 32 bytes, data[] at offset 32");
+static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 8 * sizeof(int32_t),
+              "TetraprobeCells: 4 ints a slot, 8 ints a node");
 
 }  // namespace tetraprobe

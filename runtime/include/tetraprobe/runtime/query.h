@@ -47,9 +47,9 @@ class ProbeQuery {
   // the one whose extruded triangle holds the point: a continuous answer that does not depend on the hint or
   // the walk's path (up to 1e-6 in the weights where two cells share the point).
   //
-  // Without a hint (or when the hint's short walk fails) the start tet comes from the sparse cell grid's BSP
-  // (cell_grid.h): the leaf's tets are checked exactly and the best one starts the walk, which then usually
-  // stops at once.
+  // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet comes from the
+  // sparse cell grid's BSP (cell_grid.h): the middle tet of the point's leaf, a step or two from the answer;
+  // a point whose cell is absent starts from the coarse start grid and ends in the outer cells.
   Location locate(const glm::dvec3& world, int32_t hint = -1) const;
 
   // The same answer found the previous way, by a walk from the coarse start grid's tet (no cell grid): for

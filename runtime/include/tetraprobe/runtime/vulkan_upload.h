@@ -1,4 +1,4 @@
-// Vulkan upload of a loaded level: the four storage buffers shaders/tetraprobe.glsl reads, and the
+// Vulkan upload of a loaded level: the five storage buffers shaders/tetraprobe.glsl reads, and the
 // descriptor-set plumbing for them. Permissive: Vulkan, GLM and the standard library only.
 //
 // Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written once through a
@@ -31,27 +31,28 @@ struct VulkanLevelBuffers {
 
 // Creates and fills the buffers of `level` (tets, SH), `grid` (ProbeQuery::startGrid() of a query built
 // on the same level) and `outerCells` (ProbeQuery::outerCells(); may be empty: outside answers are then the
-// clamped hull tet's). Positions stay in the level's local frame. An empty level (no tets) gives valid
-// buffers with tetCount 0, for which the shader returns E = 0. Every index the shader follows (tet probes and
-// neighbours, start tets, one SH per probe) is checked first, O(tets + cells), since the shader reads without
-// bounds checks: any out of range fails with VK_ERROR_INITIALIZATION_FAILED. A buffer over the device's
-// maxStorageBufferRange (lavapipe: 128 MiB, about 1.6 M tets) or exhausted memory fails with
-// VK_ERROR_OUT_OF_DEVICE_MEMORY. On failure nothing is left allocated and `out` is reset.
+// clamped hull tet's) and `cellGrid` (ProbeQuery::cellGrid(); may be empty: walks start from the start grid).
+// Positions stay in the level's local frame. An empty level (no tets) gives valid buffers with tetCount 0,
+// for which the shader returns E = 0. Every index the shader follows (tet probes and neighbours, start tets,
+// one SH per probe) is checked first, O(tets + cells), since the shader reads without bounds checks: any out
+// of range fails with VK_ERROR_INITIALIZATION_FAILED. A buffer over the device's maxStorageBufferRange
+// (lavapipe: 128 MiB, about 1.6 M tets) or exhausted memory fails with VK_ERROR_OUT_OF_DEVICE_MEMORY. On
+// failure nothing is left allocated and `out` is reset.
 VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
                             const StartGrid& grid, const std::vector<OuterCell>& outerCells,
-                            VulkanLevelBuffers& out, std::string* error = nullptr,
+                            const CellGrid& cellGrid, VulkanLevelBuffers& out, std::string* error = nullptr,
                             int32_t maxWalkSteps = kGpuDefaultMaxWalkSteps);
 
 // Destroys the buffers and frees their memory (null handles are skipped); resets `buffers`. The device must
 // no longer use them.
 void destroyLevelBuffers(VkDevice device, VulkanLevelBuffers& buffers);
 
-// Fills out[0..3] with the layout bindings for firstBinding + 0..3 (TETRAPROBE_BINDING in the shader):
+// Fills out[0..4] with the layout bindings for firstBinding + 0..4 (TETRAPROBE_BINDING in the shader):
 // read-only storage buffers visible to `stages`. Append them to the engine's VkDescriptorSetLayoutCreateInfo.
 void levelDescriptorBindings(VkShaderStageFlags stages, uint32_t firstBinding,
                              VkDescriptorSetLayoutBinding out[kGpuBindingCount]);
 
-// Points bindings firstBinding + 0..3 of `set` at the buffers (one vkUpdateDescriptorSets call).
+// Points bindings firstBinding + 0..4 of `set` at the buffers (one vkUpdateDescriptorSets call).
 void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstBinding,
                            const VulkanLevelBuffers& buffers);
 
