@@ -178,6 +178,7 @@ struct BenchCommand {
 
 constexpr BenchCommand kBenchCommands[] = {
     {"bake", benchBake, "probe baker rays/s vs bare Embree on the same rays"},
+    {"locate", benchLocate, "grid+BSP locate vs walk, CGAL locate and brute force on the same queries"},
 };
 
 void printBenchUsage(std::FILE* out) {
