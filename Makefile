@@ -23,7 +23,7 @@ build: configure
 
 demo: build
 	@mkdir -p out
-	$(TP) bake $(SAMPLE) -o out/two_rooms.tpb --report out/bake_report.json
+	$(TP) bake $(SAMPLE) --spacing 0.5 -o out/two_rooms.tpb --report out/bake_report.json
 	$(TP) render $(SAMPLE) out/two_rooms.tpb -o out/demo.png --camera overview --mode indirect
 	$(TP) eval $(SAMPLE) out/two_rooms.tpb --report out/eval_report.json
 

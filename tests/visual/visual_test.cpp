@@ -43,8 +43,9 @@ class Visual : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     fs::create_directories(kOut);
-    bakeStatus_ = sh(std::string(TETRAPROBE_CLI) + " bake " + kScene + " --samples 128 --threads 0 -o " +
-                     (kOut / "two_rooms.tpb").string() + " > " + (kOut / "bake.log").string() + " 2>&1");
+    bakeStatus_ =
+        sh(std::string(TETRAPROBE_CLI) + " bake " + kScene + " --spacing 0.5 --samples 128 --threads 0 -o " +
+           (kOut / "two_rooms.tpb").string() + " > " + (kOut / "bake.log").string() + " 2>&1");
   }
   static int bakeStatus_;
 
