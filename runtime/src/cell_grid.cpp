@@ -10,6 +10,8 @@
 // copying straddlers into both children would grow the tree without shrinking its leaves.
 #include "tetraprobe/runtime/cell_grid.h"
 
+#include "tetraprobe/runtime/level.h"
+
 #include <algorithm>
 #include <atomic>
 #include <climits>

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -44,7 +45,9 @@ constexpr uint32_t tag(const char (&s)[5]) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
-                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC");
+                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGRD");
+constexpr uint64_t kCellGridHeaderBytes = 64;  // min, cellSize, maxProbe, maxDepth, meanDepth, refs, 3 counts
+constexpr uint64_t kSlotBytes = 16, kNodeBytes = 32;
 
 // CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, as zlib's crc32()).
 constexpr std::array<uint32_t, 256> makeCrcTable() {
@@ -226,6 +229,47 @@ LevelResult validateLevel(const Level& level) {
       }
     }
   }
+  const CellGrid& g = level.cellGrid;
+  if (!g.slots.empty() || !g.nodes.empty() || !g.leafTets.empty()) {
+    const size_t slots = g.slots.size();
+    if (slots == 0 || (slots & (slots - 1)) != 0 || slots > kMaxCount || g.nodes.size() > kMaxCount ||
+        g.leafTets.size() > kMaxCount)
+      return corrupt("cell grid: " + std::to_string(slots) +
+                     " slots (a power of two) or counts out of range");
+    if (!finite3(g.min) || !(g.cellSize > 0.0f) || !std::isfinite(g.cellSize) || g.maxProbe < 1 ||
+        g.maxProbe > kMaxCellProbe)
+      return corrupt("cell grid: bad origin, cell size or probe bound");
+    // Leaf lists parsed once, in order: each start is a count followed by that many tets in range.
+    std::vector<uint8_t> leafStart(g.leafTets.size(), 0);
+    for (size_t at = 0; at < g.leafTets.size();) {
+      const int64_t count = g.leafTets[at];
+      if (count < 0 || int64_t(at) + count >= int64_t(g.leafTets.size()))
+        return corrupt("cell grid: leaf at " + std::to_string(at) + " overruns the leaf array");
+      for (int64_t i = 1; i <= count; ++i)
+        if (g.leafTets[at + size_t(i)] < 0 || g.leafTets[at + size_t(i)] >= tetCount)
+          return corrupt("cell grid: leaf at " + std::to_string(at) + " names a tet out of range");
+      leafStart[at] = 1;
+      at += size_t(count) + 1;
+    }
+    const auto nodeCount = int64_t(g.nodes.size());
+    // A child is a later node (so every descent ends) or the start of a leaf.
+    const auto validChild = [&](int32_t c, int64_t parent) {
+      if (c >= 0) return int64_t(c) > parent && int64_t(c) < nodeCount;
+      const int64_t at = -(int64_t(c) + 1);
+      return at < int64_t(leafStart.size()) && leafStart[size_t(at)] != 0;
+    };
+    for (size_t s = 0; s < slots; ++s)
+      if (g.slots[s].key[0] != INT32_MIN && !validChild(g.slots[s].root, -1))
+        return corrupt("cell grid: slot " + std::to_string(s) + " root out of range");
+    for (int64_t n = 0; n < nodeCount; ++n) {
+      const BspNode& node = g.nodes[size_t(n)];
+      for (float x : node.plane)
+        if (!std::isfinite(x)) return corrupt("cell grid: node " + std::to_string(n) + " plane not finite");
+      if (node.pad[0] != 0 || node.pad[1] != 0 || !validChild(node.child[0], n) ||
+          !validChild(node.child[1], n))
+        return corrupt("cell grid: node " + std::to_string(n) + " child out of range");
+    }
+  }
   return {};
 }
 
@@ -274,6 +318,31 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
         for (int a = 0; a < 3; ++a) w.f32(n[a]);
       for (int pad = 0; pad < 3; ++pad) w.u32(0);
     }
+  }
+
+  if (!level.cellGrid.slots.empty()) {
+    const CellGrid& g = level.cellGrid;
+    sections.push_back({kTagCellGrid, 0, {}});
+    Writer& s = sections.back().bytes;
+    for (int a = 0; a < 3; ++a) s.f32(g.min[a]);
+    s.f32(g.cellSize);
+    s.u32(g.maxProbe);
+    s.i32(int32_t(g.maxDepth));
+    s.f64(g.meanDepth);
+    s.u64(g.leafReferences);
+    s.u64(g.slots.size());
+    s.u64(g.nodes.size());
+    s.u64(g.leafTets.size());
+    for (const CellSlot& slot : g.slots) {
+      for (int32_t k : slot.key) s.i32(k);
+      s.i32(slot.root);
+    }
+    for (const BspNode& node : g.nodes) {
+      for (float x : node.plane) s.f32(x);
+      for (int32_t c : node.child) s.i32(c);
+      for (int32_t pad : node.pad) s.i32(pad);
+    }
+    for (int32_t t : g.leafTets) s.i32(t);
   }
 
   Writer w;
@@ -364,7 +433,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, tets, generator, outer;
+  Section probes, sh, tets, generator, outer, cellGrid;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -379,6 +448,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
                      : t == kTagTets       ? &tets
                      : t == kTagGenerator  ? &generator
                      : t == kTagOuterCells ? &outer
+                     : t == kTagCellGrid   ? &cellGrid
                                            : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
@@ -414,6 +484,20 @@ LevelResult loadLevel(const std::string& path, Level& out) {
   if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
     return fail(LevelStatus::kCorrupt,
                 name + "outer cell section of " + std::to_string(outer.size) + " bytes is not whole records");
+
+  uint64_t gridSlots = 0, gridNodes = 0, gridLeafInts = 0;
+  if (cellGrid.present) {
+    if (cellGrid.size < kCellGridHeaderBytes)
+      return fail(LevelStatus::kCorrupt, name + "cell grid section shorter than its header");
+    Reader counts(data + cellGrid.offset + 40);
+    gridSlots = counts.u64();
+    gridNodes = counts.u64();
+    gridLeafInts = counts.u64();
+    if (gridSlots > kMaxCount || gridNodes > kMaxCount || gridLeafInts > kMaxCount ||
+        cellGrid.size !=
+            kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * kNodeBytes + gridLeafInts * 4)
+      return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
+  }
 
   // Sizes are now known to be backed by the file: allocate and parse.
   Reader body(data + probes.offset);
@@ -455,6 +539,31 @@ LevelResult loadLevel(const std::string& path, Level& out) {
       for (int pad = 0; pad < 3; ++pad)
         if (body.u32() != 0) return fail(LevelStatus::kCorrupt, name + "outer cell padding is not zero");
     }
+  }
+
+  if (cellGrid.present) {
+    CellGrid& g = level.cellGrid;
+    body = Reader(data + cellGrid.offset);
+    for (int a = 0; a < 3; ++a) g.min[a] = body.f32();
+    g.cellSize = body.f32();
+    g.maxProbe = body.u32();
+    g.maxDepth = body.i32();
+    g.meanDepth = body.f64();
+    g.leafReferences = size_t(body.u64());
+    body.skip(24);  // the counts, read above
+    g.slots.resize(size_t(gridSlots));
+    for (CellSlot& slot : g.slots) {
+      for (int32_t& k : slot.key) k = body.i32();
+      slot.root = body.i32();
+    }
+    g.nodes.resize(size_t(gridNodes));
+    for (BspNode& node : g.nodes) {
+      for (float& x : node.plane) x = body.f32();
+      for (int32_t& c : node.child) c = body.i32();
+      for (int32_t& pad : node.pad) pad = body.i32();
+    }
+    g.leafTets.resize(size_t(gridLeafInts));
+    for (int32_t& t : g.leafTets) t = body.i32();
   }
 
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);

@@ -316,7 +316,8 @@ StartGrid buildStartGrid(const Level& level) {
 ProbeQuery::ProbeQuery(const Level& level, float cellSize, int threads)
     : level_(level), grid_(buildStartGrid(level)) {
   if (level.outerCells.empty() && !level.tets.empty()) ownCells_ = buildOuterCells(level.probes, level.tets);
-  cells_ = buildCellGrid(level.probes, level.tets, cellSize, threads);
+  if (level.cellGrid.slots.empty() || level.cellGrid.cellSize != cellSize)
+    ownGrid_ = buildCellGrid(level.probes, level.tets, cellSize, threads);
 }
 
 // Walks the outer cells from `startCell` to the one whose extruded triangle holds x: each step crosses the
@@ -400,7 +401,7 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   // The cell grid's leaf names the walk's start; the walk decides the answer (so it does not depend on how
   // the tree was split), stepping to the neighbour or out to the outer cells as needed.
   int32_t count = 0;
-  const int32_t* leaf = cellGridLeaf(cells_, x, &count);
+  const int32_t* leaf = cellGridLeaf(cellGrid(), x, &count);
   // Leaves hold the tets overlapping a region about one tet across, in index (Morton) order: the middle one
   // is near the region's centre, and the walk from it takes a step or two. Checking every leaf tet would
   // cost more than those steps.

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -43,6 +44,7 @@ Level smallLevel() {
       test::makeLevel(test::randomBoxPoints(10, 3, {-2, -1, -3}, {2, 1, 3}), {5000.25, -20.5, 1e4}, 9);
   level.content = kContentAll;
   level.outerCells = buildOuterCells(level.probes, level.tets);
+  level.cellGrid = buildCellGrid(level.probes, level.tets, 2.0f, 1);
   return level;
 }
 
@@ -80,7 +82,8 @@ void fixPayloadCrc(std::vector<char>& b) {
 }
 
 bool emptyLevel(const Level& l) {
-  return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty() && l.outerCells.empty();
+  return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty() && l.outerCells.empty() &&
+         l.cellGrid.slots.empty() && l.cellGrid.nodes.empty() && l.cellGrid.leafTets.empty();
 }
 
 uint32_t getU32(const std::vector<char>& b, size_t at) {
@@ -155,15 +158,30 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(std::memcmp(back.outerCells.data(), level.outerCells.data(),
                         level.outerCells.size() * sizeof(OuterCell)),
             0);
+  const CellGrid &g = level.cellGrid, &gb = back.cellGrid;
+  ASSERT_FALSE(g.slots.empty());
+  EXPECT_EQ(gb.min, g.min);
+  EXPECT_EQ(gb.cellSize, g.cellSize);
+  EXPECT_EQ(gb.maxProbe, g.maxProbe);
+  EXPECT_EQ(gb.maxDepth, g.maxDepth);
+  EXPECT_EQ(gb.meanDepth, g.meanDepth);
+  EXPECT_EQ(gb.leafReferences, g.leafReferences);
+  ASSERT_EQ(gb.slots.size(), g.slots.size());
+  ASSERT_EQ(gb.nodes.size(), g.nodes.size());
+  EXPECT_EQ(std::memcmp(gb.slots.data(), g.slots.data(), g.slots.size() * sizeof(CellSlot)), 0);
+  EXPECT_EQ(std::memcmp(gb.nodes.data(), g.nodes.data(), g.nodes.size() * sizeof(BspNode)), 0);
+  EXPECT_EQ(gb.leafTets, g.leafTets);
   ASSERT_TRUE(saveLevel(dir.file("b.tpb"), level));
   ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
-  // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 120 bytes per
-  // probe, 80 per tet, the generator, 80 per outer cell, a 4-byte CRC.
-  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 5 * 24 + 4 + 120 * level.probes.size() +
+  // The documented size: 80-byte header, six 24-byte table entries and the table's CRC, 120 bytes per
+  // probe, 80 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 32 per
+  // node, 4 per leaf int), a 4-byte CRC.
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 6 * 24 + 4 + 120 * level.probes.size() +
                                                    80 * level.tets.size() + level.generator.size() +
-                                                   80 * level.outerCells.size() + 4);
+                                                   80 * level.outerCells.size() + 64 + 16 * g.slots.size() +
+                                                   32 * g.nodes.size() + 4 * g.leafTets.size() + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -209,6 +227,11 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
   const size_t tets = sectionOffset(full, "TETS"), outer = sectionOffset(full, "OUTC");
+  const size_t grid = sectionOffset(full, "CGRD"), slots = grid + 64,
+               nodes = slots + 16 * level.cellGrid.slots.size(),
+               leaves = nodes + 32 * level.cellGrid.nodes.size();
+  size_t usedSlot = 0;
+  while (level.cellGrid.slots[usedSlot].key[0] == INT32_MIN) ++usedSlot;
   const struct {
     size_t offset;
     uint32_t value;
@@ -221,7 +244,13 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
                {outer + 16, uint32_t(level.outerCells.size()), "out of range"},  // outer cell 0's link 0
                {outer + 0, uint32_t(level.probes.size() + 3), "not a vertex"},   // outer cell 0's probe 0
                {outer + 32, 0x7FC00000u, "not a unit vector"},                   // outer cell 0's normal: NaN
-               {outer + 76, 1u, "padding"}};
+               {outer + 76, 1u, "padding"},
+               {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
+               {slots + 16 * usedSlot + 12, uint32_t(-int32_t(level.cellGrid.leafTets.size()) - 3),
+                "root out of range"},
+               {leaves, uint32_t(level.cellGrid.leafTets.size()), "overruns"},
+               {leaves + 4, uint32_t(level.tets.size()), "tet out of range"},
+               {grid + 12, 0x7FC00000u, "cell size"}};
   for (const auto& c : cases) {
     std::vector<char> b = full;
     putU32(b, c.offset, c.value);

@@ -200,6 +200,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   for (const auto& p : probes) level.probes.push_back(glm::vec3(p - level.origin));
   level.tets = buildTetRecords(probes, mesh, level.origin);
   level.outerCells = buildOuterCells(level.probes, level.tets);  // continuous answers outside the hull
+  level.cellGrid = buildCellGrid(level.probes, level.tets);  // point location: 16 m cells, a BSP each
   if (!options.importShCsv.empty()) {
     level.sh = std::move(imported.sh);
     truncateShOrder(level.sh, options.bake.shOrder);

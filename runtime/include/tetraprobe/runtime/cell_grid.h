@@ -10,9 +10,9 @@
 
 #include <glm/vec3.hpp>
 
-#include "tetraprobe/runtime/level.h"
-
 namespace tetraprobe {
+
+struct Tet;  // level.h (which holds a CellGrid)
 
 // One BSP node, flat array (32 bytes). A point x (local frame) goes to child[1] when
 // dot(plane.xyz, x) + plane.w >= 0, else to child[0]. A child >= 0 is a node index; a child < 0 is the leaf

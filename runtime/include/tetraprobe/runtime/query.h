@@ -72,7 +72,8 @@ class ProbeQuery {
 
   const Level& level() const { return level_; }
   const StartGrid& startGrid() const { return grid_; }
-  const CellGrid& cellGrid() const { return cells_; }
+  // The level's stored cell grid when it has one of the asked cell size, else the one built on construction.
+  const CellGrid& cellGrid() const { return ownGrid_.slots.empty() ? level_.cellGrid : ownGrid_; }
   // The level's outer cells, or the ones built on construction when the level carries none.
   const std::vector<OuterCell>& outerCells() const {
     return ownCells_.empty() ? level_.outerCells : ownCells_;
@@ -86,7 +87,7 @@ class ProbeQuery {
   const Level& level_;
   StartGrid grid_;
   std::vector<OuterCell> ownCells_;
-  CellGrid cells_;
+  CellGrid ownGrid_;
 };
 
 }  // namespace tetraprobe
