@@ -67,6 +67,7 @@ class Visual : public ::testing::Test {
     }
     const fs::path ref = kRef / (name + ".png");
     if (std::getenv("TETRAPROBE_UPDATE_REFERENCES")) {
+      fs::create_directories(kRef);
       fs::copy_file(img, ref, fs::copy_options::overwrite_existing);
       GTEST_SKIP() << "reference updated: " << ref;
     }
