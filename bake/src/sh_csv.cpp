@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/common/text.h"
 #include "tetraprobe/runtime/file_io.h"
 
 namespace tetraprobe {
@@ -20,23 +21,8 @@ namespace {
 constexpr int kFields = 3 + 3 * kShCoeffCount;
 static_assert(kFields == 30, "x,y,z + 27 coefficients");
 
-std::string_view trim(std::string_view s) {
-  const char* ws = " \t\r\n\v\f";
-  const size_t b = s.find_first_not_of(ws);
-  if (b == std::string_view::npos) return {};
-  return s.substr(b, s.find_last_not_of(ws) - b + 1);
-}
-
-bool parseFinite(std::string_view field, double& out) {
-  field = trim(field);
-  if (field.empty()) return false;
-  if (field.front() == '+') field.remove_prefix(1);
-  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), out);
-  return ec == std::errc() && end == field.data() + field.size() && std::isfinite(out);
-}
-
 bool parseFiniteFloat(std::string_view field, float& out) {
-  field = trim(field);
+  field = trimWhitespace(field);
   if (field.empty()) return false;
   if (field.front() == '+') field.remove_prefix(1);
   const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), out);
@@ -62,13 +48,13 @@ ProbeShTable parseShCsv(const std::string& text, const std::string& source) {
   bool firstRecord = true;
   for (size_t lineNo = 1; !rest.empty(); ++lineNo) {
     const size_t nl = rest.find('\n');
-    const std::string_view line = trim(rest.substr(0, nl));
+    const std::string_view line = trimWhitespace(rest.substr(0, nl));
     rest.remove_prefix(nl == std::string_view::npos ? rest.size() : nl + 1);
     if (line.empty() || line.front() == '#') continue;
     const std::vector<std::string_view> fields = split(line);
     const std::string where = source + ":" + std::to_string(lineNo) + ": ";
     double first = 0.0;
-    if (firstRecord && !parseFinite(fields[0], first)) {
+    if (firstRecord && !parseFiniteField(fields[0], first)) {
       firstRecord = false;  // a header line
       continue;
     }
@@ -78,17 +64,17 @@ ProbeShTable parseShCsv(const std::string& text, const std::string& source) {
                        std::to_string(fields.size()));
     glm::dvec3 p;
     for (int k = 0; k < 3; ++k)
-      if (!parseFinite(fields[size_t(k)], p[k]))
+      if (!parseFiniteField(fields[size_t(k)], p[k]))
         throw InputError(where + "field " + std::to_string(k + 1) + " '" +
-                         std::string(trim(fields[size_t(k)])) +
+                         std::string(trimWhitespace(fields[size_t(k)])) +
                          "' is not a finite number (position, metres)");
     ShRgb sh;
     for (int k = 3; k < kFields; ++k) {
       const int i = (k - 3) / 3, c = (k - 3) % 3;
       if (!parseFiniteFloat(fields[size_t(k)], sh.c[size_t(i)][c]))
-        throw InputError(where + "field " + std::to_string(k + 1) + " '" +
-                         std::string(trim(fields[size_t(k)])) + "' is not a finite float (SH coefficient " +
-                         std::to_string(i) + ", channel " + "rgb"[c] + ")");
+        throw InputError(
+            where + "field " + std::to_string(k + 1) + " '" + std::string(trimWhitespace(fields[size_t(k)])) +
+            "' is not a finite float (SH coefficient " + std::to_string(i) + ", channel " + "rgb"[c] + ")");
     }
     table.positions.push_back(p);
     table.sh.push_back(sh);

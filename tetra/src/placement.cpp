@@ -9,29 +9,13 @@
 #include <string_view>
 
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/common/text.h"
 
 namespace tetraprobe {
 namespace {
 
 bool finite(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-std::string_view trim(std::string_view s) {
-  const char* ws = " \t\r\n\v\f";
-  const size_t b = s.find_first_not_of(ws);
-  if (b == std::string_view::npos) return {};
-  return s.substr(b, s.find_last_not_of(ws) - b + 1);
-}
-
-// Parses one whole field as a finite double; returns false for anything else (empty, trailing text, NaN,
-// Inf).
-bool parseFinite(std::string_view field, double& out) {
-  field = trim(field);
-  if (field.empty()) return false;
-  if (field.front() == '+') field.remove_prefix(1);  // from_chars rejects a leading '+'
-  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), out);
-  return ec == std::errc() && end == field.data() + field.size() && std::isfinite(out);
 }
 
 }  // namespace
@@ -72,7 +56,7 @@ std::vector<glm::dvec3> readProbeCsv(const std::string& path) {
   std::vector<glm::dvec3> probes;
   std::string line;
   for (size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-    const std::string_view s = trim(line);
+    const std::string_view s = trimWhitespace(line);
     if (s.empty() || s.front() == '#') continue;
     glm::dvec3 p;
     std::string_view rest = s;
@@ -81,7 +65,7 @@ std::vector<glm::dvec3> readProbeCsv(const std::string& path) {
     while (true) {
       const size_t comma = rest.find(',');
       const std::string_view field = rest.substr(0, comma);
-      if (fields < 3) ok = parseFinite(field, p[fields]) && ok;
+      if (fields < 3) ok = parseFiniteField(field, p[fields]) && ok;
       ++fields;
       if (comma == std::string_view::npos) break;
       rest.remove_prefix(comma + 1);
