@@ -47,7 +47,11 @@ int quadraticRoots(double a, double b, double c, double r[2]) {
 // stay in the bracket, bisection otherwise.
 double refineRoot(const double c[4], double lo, double hi) {
   double flo = horner(c, lo);
-  double t = 0.5 * (lo + hi);
+  // Start from the Newton step off the low end: the bracket reaches kMaxT while the root is usually within
+  // a cell size of the face, so starting at the midpoint cost dozens of bisections (the query hot spot).
+  const double dlo = (3.0 * c[3] * lo + 2.0 * c[2]) * lo + c[1];
+  double t = dlo != 0.0 ? lo - flo / dlo : 0.5 * (lo + hi);
+  if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
   for (int it = 0; it < 200; ++it) {
     const double f = horner(c, t);
     if (f == 0.0) return t;
