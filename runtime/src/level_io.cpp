@@ -45,7 +45,10 @@ constexpr uint32_t tag(const char (&s)[5]) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
-                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGRD");
+                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGRD"),
+                   kTagOcclusion = tag("OCCL");
+constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
+constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
 constexpr uint64_t kCellGridHeaderBytes = 64;  // min, cellSize, maxProbe, maxDepth, meanDepth, refs, 3 counts
 constexpr uint64_t kSlotBytes = 16, kNodeBytes = 32;
 
@@ -270,6 +273,45 @@ LevelResult validateLevel(const Level& level) {
         return corrupt("cell grid: node " + std::to_string(n) + " child out of range");
     }
   }
+  const LevelOcclusion& occ = level.occlusion;
+  if (!occ.tets.empty() || !occ.planes.empty() || !occ.shadowMaps.empty()) {
+    if (occ.tets.size() != level.tets.size())
+      return corrupt("occlusion: " + std::to_string(occ.tets.size()) + " records for " +
+                     std::to_string(level.tets.size()) + " tets");
+    if (occ.shadowMaps.size() % kShadowMapBlockBytes != 0 || occ.planes.size() > kOcclusionMaxOffset ||
+        occ.shadowMaps.size() / kShadowMapBlockBytes > kOcclusionMaxOffset)
+      return corrupt("occlusion: plane or shadow-map block count out of range");
+    const uint64_t blocks = occ.shadowMaps.size() / kShadowMapBlockBytes;
+    uint64_t planesUsed = 0, blocksUsed = 0;
+    for (size_t t = 0; t < occ.tets.size(); ++t) {
+      const TetOcclusion& rec = occ.tets[t];
+      const std::string where = "occlusion of tet " + std::to_string(t) + ": ";
+      const uint32_t kind = rec.header & 3u;
+      if (kind == kOcclusionNone) {
+        if (rec.header != 0 || rec.cells != 0) return corrupt(where + "kind none with non-zero fields");
+      } else if (kind == kOcclusionPlanes) {
+        const uint32_t count = rec.planeCount();
+        const uint32_t usedBits = 4u << count;  // 2^count cells x 4 bits
+        if (count == 0 || uint64_t(rec.offset()) + count > occ.planes.size() ||
+            (usedBits < 32 && (rec.cells >> usedBits) != 0))
+          return corrupt(where + "plane count, offset or cell masks out of range");
+        planesUsed += count;
+      } else if (kind == kOcclusionShadowMaps) {
+        if (rec.planeCount() != 0 || rec.cells != 0 || rec.offset() >= blocks)
+          return corrupt(where + "shadow-map block out of range");
+        ++blocksUsed;
+      } else {
+        return corrupt(where + "unknown kind " + std::to_string(kind));
+      }
+    }
+    if (planesUsed != occ.planes.size() || blocksUsed != blocks)
+      return corrupt("occlusion: " + std::to_string(occ.planes.size()) + " planes and " +
+                     std::to_string(blocks) + " shadow-map blocks, the records use " +
+                     std::to_string(planesUsed) + " and " + std::to_string(blocksUsed));
+    for (size_t k = 0; k < occ.planes.size(); ++k)
+      for (float x : occ.planes[k].c)
+        if (!std::isfinite(x)) return corrupt("occlusion: plane " + std::to_string(k) + " not finite");
+  }
   return {};
 }
 
@@ -343,6 +385,22 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
       for (int32_t pad : node.pad) s.i32(pad);
     }
     for (int32_t t : g.leafTets) s.i32(t);
+  }
+
+  if (!level.occlusion.empty()) {  // an empty occlusion writes no section: such files stay byte-identical
+    const LevelOcclusion& occ = level.occlusion;
+    sections.push_back({kTagOcclusion, 0, {}});
+    Writer& s = sections.back().bytes;
+    s.u64(occ.tets.size());
+    s.u64(occ.planes.size());
+    s.u64(occ.shadowMaps.size() / kShadowMapBlockBytes);
+    for (const TetOcclusion& rec : occ.tets) {
+      s.u32(rec.header);
+      s.u32(rec.cells);
+    }
+    for (const OcclusionPlane& p : occ.planes)
+      for (float x : p.c) s.f32(x);
+    s.bytes(occ.shadowMaps.data(), occ.shadowMaps.size());
   }
 
   Writer w;
@@ -433,7 +491,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, tets, generator, outer, cellGrid;
+  Section probes, sh, tets, generator, outer, cellGrid, occlusion;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -449,6 +507,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
                      : t == kTagGenerator  ? &generator
                      : t == kTagOuterCells ? &outer
                      : t == kTagCellGrid   ? &cellGrid
+                     : t == kTagOcclusion  ? &occlusion
                                            : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
@@ -497,6 +556,20 @@ LevelResult loadLevel(const std::string& path, Level& out) {
         cellGrid.size !=
             kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * kNodeBytes + gridLeafInts * 4)
       return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
+  }
+
+  uint64_t occTets = 0, occPlanes = 0, occBlocks = 0;
+  if (occlusion.present) {
+    if (occlusion.size < kOcclusionHeaderBytes)
+      return fail(LevelStatus::kCorrupt, name + "occlusion section shorter than its header");
+    Reader counts(data + occlusion.offset);
+    occTets = counts.u64();
+    occPlanes = counts.u64();
+    occBlocks = counts.u64();
+    if (occTets != tetCount || occPlanes > kOcclusionMaxOffset || occBlocks > kOcclusionMaxOffset ||
+        occlusion.size != kOcclusionHeaderBytes + occTets * kTetOcclusionBytes +
+                              occPlanes * kOcclusionPlaneBytes + occBlocks * kShadowMapBlockBytes)
+      return fail(LevelStatus::kCorrupt, name + "occlusion section size does not match its counts");
   }
 
   // Sizes are now known to be backed by the file: allocate and parse.
@@ -564,6 +637,22 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     }
     g.leafTets.resize(size_t(gridLeafInts));
     for (int32_t& t : g.leafTets) t = body.i32();
+  }
+
+  if (occlusion.present) {
+    LevelOcclusion& occ = level.occlusion;
+    body = Reader(data + occlusion.offset + kOcclusionHeaderBytes);
+    occ.tets.resize(size_t(occTets));
+    for (TetOcclusion& rec : occ.tets) {
+      rec.header = body.u32();
+      rec.cells = body.u32();
+    }
+    occ.planes.resize(size_t(occPlanes));
+    for (OcclusionPlane& p : occ.planes)
+      for (float& x : p.c) x = body.f32();
+    occ.shadowMaps.resize(size_t(occBlocks * kShadowMapBlockBytes));
+    if (!occ.shadowMaps.empty())
+      std::memcpy(occ.shadowMaps.data(), body.skip(occ.shadowMaps.size()), occ.shadowMaps.size());
   }
 
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);

@@ -13,6 +13,7 @@
 #include "test_levels.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/query.h"
 
@@ -430,6 +431,121 @@ TEST(LevelFile, OuterCellsOptional) {
   const ProbeQuery q(back);
   ASSERT_EQ(q.outerCells().size(), cells.size());
   EXPECT_EQ(std::memcmp(q.outerCells().data(), cells.data(), cells.size() * sizeof(OuterCell)), 0);
+}
+
+// A synthetic occlusion for `level`: kinds cycle none, planes (1..3), shadow maps; packed as the builder
+// packs.
+LevelOcclusion syntheticOcclusion(const Level& level) {
+  LevelOcclusion occ;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    const size_t kind = t % 5;
+    if (kind == 0) {
+      occ.tets.push_back({});
+    } else if (kind <= 3) {
+      const uint32_t count = uint32_t(kind);
+      uint32_t cells = 0;
+      for (uint32_t c = 0; c < (1u << count); ++c) cells |= (uint32_t(rng()) & 15u) << (4 * c);
+      occ.tets.push_back(makeTetOcclusion(kOcclusionPlanes, count, uint32_t(occ.planes.size()), cells));
+      for (uint32_t k = 0; k < count; ++k) occ.planes.push_back({{u(rng), u(rng), u(rng), 1.0f}});
+    } else {
+      occ.tets.push_back(makeTetOcclusion(kOcclusionShadowMaps, 0,
+                                          uint32_t(occ.shadowMaps.size() / kShadowMapBlockBytes), 0));
+      for (int b = 0; b < kShadowMapBlockBytes; ++b) occ.shadowMaps.push_back(uint8_t(rng()));
+    }
+  }
+  return occ;
+}
+
+TEST(LevelFile, OcclusionRoundTripsAndEmptyWritesNoSection) {
+  TempDir dir;
+  Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("none.tpb"), level));
+  level.occlusion = syntheticOcclusion(level);
+  ASSERT_FALSE(level.occlusion.planes.empty());
+  ASSERT_FALSE(level.occlusion.shadowMaps.empty());
+  ASSERT_TRUE(saveLevel(dir.file("occ.tpb"), level));
+  Level back;
+  const LevelResult r = loadLevel(dir.file("occ.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  const LevelOcclusion &a = level.occlusion, &b = back.occlusion;
+  ASSERT_EQ(b.tets.size(), a.tets.size());
+  ASSERT_EQ(b.planes.size(), a.planes.size());
+  EXPECT_EQ(std::memcmp(b.tets.data(), a.tets.data(), a.tets.size() * sizeof(TetOcclusion)), 0);
+  EXPECT_EQ(std::memcmp(b.planes.data(), a.planes.data(), a.planes.size() * sizeof(OcclusionPlane)), 0);
+  EXPECT_EQ(b.shadowMaps, a.shadowMaps);
+  ASSERT_TRUE(saveLevel(dir.file("again.tpb"), back));
+  const std::vector<char> occBytes = bytesOf(dir.file("occ.tpb"));
+  EXPECT_EQ(occBytes, bytesOf(dir.file("again.tpb")));
+  // One more section: 24-byte table entry, 24-byte counts, 8 per tet, 16 per plane, 64 per shadow-map block.
+  EXPECT_EQ(occBytes.size(), bytesOf(dir.file("none.tpb")).size() + 24 + 24 + 8 * a.tets.size() +
+                                 16 * a.planes.size() + a.shadowMaps.size());
+  // Dropping it again gives the bytes of a level that never had any.
+  back.occlusion = {};
+  ASSERT_TRUE(saveLevel(dir.file("dropped.tpb"), back));
+  EXPECT_EQ(bytesOf(dir.file("dropped.tpb")), bytesOf(dir.file("none.tpb")));
+}
+
+TEST(LevelFile, RejectsInconsistentOcclusion) {
+  TempDir dir;
+  Level level = smallLevel();
+  level.occlusion = syntheticOcclusion(level);
+  {  // in memory: the writer refuses
+    Level bad = level;
+    bad.occlusion.tets.pop_back();
+    EXPECT_FALSE(validateLevel(bad));
+    EXPECT_FALSE(saveLevel(dir.file("bad.tpb"), bad));
+    bad = level;
+    bad.occlusion.shadowMaps.pop_back();
+    EXPECT_FALSE(validateLevel(bad));
+    bad = level;
+    bad.occlusion.planes.push_back({});
+    EXPECT_FALSE(validateLevel(bad));
+    bad = level;
+    bad.occlusion.planes[0].c[2] = NAN;
+    EXPECT_FALSE(validateLevel(bad));
+  }
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  const size_t occ = sectionOffset(full, "OCCL"), recs = occ + 24;
+  const TetOcclusion& planes1 = level.occlusion.tets[1];  // planes, count 1
+  const TetOcclusion& shadow = level.occlusion.tets[4];   // shadow maps
+  const struct {
+    size_t offset;
+    uint32_t value;
+    const char* needle;
+  } cases[] = {
+      {occ + 0, uint32_t(level.tets.size() - 1), "does not match its counts"},  // tet count
+      {occ + 16, 0u, "does not match its counts"},                              // shadow-map block count
+      {recs + 0, 3u, "unknown kind"},                                           // tet 0: kind 3
+      {recs + 4, 1u, "non-zero"},                                               // tet 0: none with cells
+      {recs + 8, makeTetOcclusion(kOcclusionPlanes, 1, uint32_t(level.occlusion.planes.size()), 0).header,
+       "out of range"},                                        // plane offset
+      {recs + 8 + 4, planes1.cells | 0x100u, "out of range"},  // cell 2 of 1 plane
+      {recs + 8, makeTetOcclusion(kOcclusionPlanes, 2, planes1.offset(), 0).header, "the records use"},
+      {recs + 32, makeTetOcclusion(kOcclusionShadowMaps, 0, 1u << 20, 0).header, "out of range"},
+      {recs + 32 + 4, 1u, "out of range"},  // shadow maps with cells
+  };
+  ASSERT_EQ(shadow.kind(), kOcclusionShadowMaps);
+  for (const auto& c : cases) {
+    std::vector<char> b = full;
+    putU32(b, c.offset, c.value);
+    fixPayloadCrc(b);
+    writeBytes(dir.file("forged.tpb"), b, b.size());
+    Level out;
+    const LevelResult r = loadLevel(dir.file("forged.tpb"), out);
+    EXPECT_EQ(r.status, LevelStatus::kCorrupt) << r.message;
+    EXPECT_NE(r.message.find(c.needle), std::string::npos) << r.message;
+    EXPECT_TRUE(emptyLevel(out));
+    EXPECT_TRUE(out.occlusion.empty());
+  }
+  // Every truncation of the occlusion section is reported, never read past.
+  for (size_t n = occ; n < full.size(); n += 7) {
+    writeBytes(dir.file("short.tpb"), full, n);
+    Level out;
+    EXPECT_FALSE(loadLevel(dir.file("short.tpb"), out));
+  }
 }
 
 }  // namespace

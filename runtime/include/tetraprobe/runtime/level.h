@@ -14,6 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/runtime/cell_grid.h"
+#include "tetraprobe/runtime/occlusion_data.h"
 #include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
@@ -71,6 +72,9 @@ struct Level {
   // The point-location accelerator (buildCellGrid in cell_grid.h). Optional: when it has no slots,
   // ProbeQuery builds it itself on construction (about 45 s for a million probes on two cores).
   CellGrid cellGrid;
+  // Per-tet occlusion against light leaking (occlusion.h, docs/occlusion.md). Optional: empty = none (every
+  // probe visible); otherwise occlusion.tets.size() == tets.size().
+  LevelOcclusion occlusion;
   std::string generator;  // free text: tool version and options that produced the file
 };
 

@@ -30,6 +30,7 @@
 #include <glm/vec4.hpp>
 
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion_data.h"
 
 namespace tetraprobe {
 
@@ -38,69 +39,6 @@ inline constexpr float kOcclusionPlaneFalloff = 0.02f;   // half-width, plane un
 inline constexpr float kOcclusionShadowFalloff = 0.01f;  // half-width, fraction of probe-to-face distance
 inline constexpr float kOcclusionFallbackSum = 1e-3f;    // applyOcclusion: visible weight below which the
                                                          // unoccluded weights are blended back in
-
-enum OcclusionKind : uint32_t { kOcclusionNone = 0, kOcclusionPlanes = 1, kOcclusionShadowMaps = 2 };
-
-// Per tet, same order as Level::tets. GLSL: uvec2.
-// - header bits 0-1: OcclusionKind; bits 2-3: plane count (1..3, planes only); bits 4-31: offset, the index
-//   of the tet's first OcclusionPlane (planes) or of its 64-byte block in shadowMaps (shadow maps).
-// - cells (planes only, else 0): the probes visible from each cell of the plane arrangement. Cell c has bit k
-//   set when the point is on the positive side of plane k (value >= 0); its 4-bit mask is
-//   (cells >> 4c) & 15, bit i = probe tet.v[i] visible. Cells 2^count.. are unused (0).
-struct TetOcclusion {
-  uint32_t header = 0;
-  uint32_t cells = 0;
-
-  OcclusionKind kind() const { return OcclusionKind(header & 3u); }
-  uint32_t planeCount() const { return (header >> 2) & 3u; }
-  uint32_t offset() const { return header >> 4; }
-};
-static_assert(sizeof(TetOcclusion) == 8, "TetOcclusion is a std430 uvec2");
-
-inline constexpr uint32_t kOcclusionMaxOffset = (1u << 28) - 1u;
-
-inline TetOcclusion makeTetOcclusion(OcclusionKind kind, uint32_t planeCount, uint32_t offset,
-                                     uint32_t cells) {
-  return TetOcclusion{uint32_t(kind) | (planeCount & 3u) << 2 | offset << 4, cells};
-}
-
-// A splitting plane in the tet's barycentric frame: c[i] is the signed distance of probe tet.v[i] to the
-// plane divided by the largest of the four absolute distances (so max |c[i]| = 1). Its value at a point with
-// weights w is dot(c, w): the signed distance in units of that largest distance. GLSL: vec4.
-struct alignas(16) OcclusionPlane {
-  float c[4] = {0, 0, 0, 0};
-};
-static_assert(sizeof(OcclusionPlane) == 16, "OcclusionPlane is a std430 vec4");
-
-// Shadow maps: 4 probes x 16 bytes, probe slot i at block * 64 + 16 i. The face opposite probe tet.v[i] is
-// split 4x4 into 16 sub-triangles (shadowMapCell); byte shadowMapVertex(a, b) (15 used, byte 15 = 255) holds
-// the depth at lattice vertex (u, v) = (a/4, b/4), a + b <= 4: the fraction f of the way from the probe to
-// that face point at which the first geometry is met, as round(254 f) (0..254), or 255 when nothing is met
-// before the face. Inside a sub-triangle the depth is interpolated from its three corners harmonically,
-// 1/d = sum_k b_k / d_k (a no-hit corner counts as d = 1): exact for any planar occluder met by all three
-// corner rays, where one value per sub-triangle (the centre ray) misjudges every point off the centre.
-inline constexpr int kShadowMapTexels = 16;
-inline constexpr int kShadowMapBlockBytes = 4 * kShadowMapTexels;
-inline constexpr uint8_t kShadowMapNoHit = 255;
-inline constexpr float kShadowMapScale = 254.0f;
-inline constexpr int kShadowMapLatticeVertices = 15;
-inline constexpr int shadowMapVertex(int a, int b) {
-  return b * 5 - b * (b - 1) / 2 + a;
-}  // a + b <= 4
-static_assert(shadowMapVertex(0, 4) == kShadowMapLatticeVertices - 1, "15 lattice vertices in 16 bytes");
-
-// The occlusion data of a level. `tets` empty means the level has none: nothing stored, nothing evaluated
-// (every probe visible). Otherwise tets.size() == level.tets.size().
-struct LevelOcclusion {
-  std::vector<TetOcclusion> tets;
-  std::vector<OcclusionPlane> planes;
-  std::vector<uint8_t> shadowMaps;  // multiple of 64 bytes
-
-  bool empty() const { return tets.empty(); }
-  size_t bytes() const {
-    return tets.size() * sizeof(TetOcclusion) + planes.size() * sizeof(OcclusionPlane) + shadowMaps.size();
-  }
-};
 
 // Sub-triangle of a face's 4x4 subdivision. The face opposite probe i has corners A, B, C = the other three
 // tet vertices in increasing slot order; (u, v) are the barycentrics of B and C (A gets 1-u-v). Row r (v in
