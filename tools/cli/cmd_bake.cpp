@@ -51,6 +51,12 @@ int cmdBake(int argc, char** argv) {
         "take probe positions and SH from another baker (x,y,z + 27 coefficients a line, see "
         "bake/include/tetraprobe/bake/sh_csv.h) instead of placing and path tracing",
         ""},
+       {"--occlusion", "", "auto|none|planes|shadow-maps",
+        "per-tet occlusion against light leaking, stored in the level (docs/occlusion.md): auto = the "
+        "cheapest of none, 1-3 planes, shadow maps that meets --min-agreement; none = store nothing",
+        "auto"},
+       {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
+        "0.98"},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
@@ -109,6 +115,13 @@ int cmdBake(int argc, char** argv) {
   else
     throw UsageError("--content must be 'default' or 'all', not '" + content + "'");
 
+  if (!parseOcclusionMode(args.str("--occlusion"), opt.occlusion.mode))
+    throw UsageError("--occlusion must be auto, none, planes or shadow-maps, not '" +
+                     args.str("--occlusion") + "'");
+  opt.occlusion.minAgreement = args.number("--min-agreement");
+  if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
+    throw UsageError("--min-agreement must be in [0, 1]");
+
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = loadScene(scenePath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -156,6 +169,16 @@ int cmdBake(int argc, char** argv) {
   std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
               opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
               stats.dering.minIrradianceAfter);
+  if (opt.occlusion.mode != OcclusionMode::kNone)
+    std::printf(
+        "  occl    %s: %zu tets with geometry; %zu none, %zu planes, %zu shadow maps; %zu bytes (%.2f per "
+        "tet); agreement %.4f\n",
+        occlusionModeName(opt.occlusion.mode), stats.occlusion.tetsWithGeometry, stats.occlusion.none,
+        stats.occlusion.planeTets, stats.occlusion.shadowMapTets, level.occlusion.bytes(),
+        level.tets.empty() ? 0.0 : double(level.occlusion.bytes()) / double(level.tets.size()),
+        stats.occlusion.agreement);
+  else
+    std::printf("  occl    none\n");
   std::printf("  bytes   %llu (probes %llu, SH %llu, tets %llu)\n", (unsigned long long)fileBytes,
               (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
   std::printf("  time   ");
@@ -182,7 +205,9 @@ int cmdBake(int argc, char** argv) {
                     {"filler_spacing", opt.fillerSpacing},
                     {"tetra", opt.tetra},
                     {"sh_order", opt.bake.shOrder},
-                    {"dering", dering}};
+                    {"dering", dering},
+                    {"occlusion", occlusionModeName(opt.occlusion.mode)},
+                    {"min_agreement", opt.occlusion.minAgreement}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},
@@ -211,6 +236,13 @@ int cmdBake(int argc, char** argv) {
                  {"seconds", stats.bake.seconds},
                  {"rays_per_s", stats.bake.raysPerSecond()},
                  {"imported", stats.importedProbes > 0}};
+    j["occlusion"] = {{"mode", occlusionModeName(opt.occlusion.mode)},
+                      {"none", level.occlusion.empty() ? level.tets.size() : stats.occlusion.none},
+                      {"planes", stats.occlusion.planeTets},
+                      {"shadow_maps", stats.occlusion.shadowMapTets},
+                      {"tets_with_geometry", stats.occlusion.tetsWithGeometry},
+                      {"bytes", level.occlusion.bytes()},
+                      {"agreement", stats.occlusion.agreement}};
     nlohmann::json timings = nlohmann::json::object();
     for (const auto& [stage, s] : stats.timings) timings[stage] = s;
     timings["total"] = total;

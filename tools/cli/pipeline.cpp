@@ -200,7 +200,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   for (const auto& p : probes) level.probes.push_back(glm::vec3(p - level.origin));
   level.tets = buildTetRecords(probes, mesh, level.origin);
   level.outerCells = buildOuterCells(level.probes, level.tets);  // continuous answers outside the hull
-  level.cellGrid = buildCellGrid(level.probes, level.tets);  // point location: 16 m cells, a BSP each
+  level.cellGrid = buildCellGrid(level.probes, level.tets);      // point location: 16 m cells, a BSP each
   if (!options.importShCsv.empty()) {
     level.sh = std::move(imported.sh);
     truncateShOrder(level.sh, options.bake.shOrder);
@@ -214,6 +214,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   stats.dering = deringProbes(level.sh, dering);
   timer.mark("dering");
 
+  if (options.occlusion.mode != OcclusionMode::kNone) {
+    OcclusionOptions occ = options.occlusion;
+    occ.threads = options.bake.threads;
+    occ.progress = options.bake.progress;
+    level.occlusion = buildOcclusion(tracer, level, occ, &stats.occlusion);
+    timer.mark("occlusion");
+  }
+
   std::ostringstream gen;
   gen << "tetraprobe 0.1.0 bake; placement="
       << (!options.importShCsv.empty()  ? "imported"
@@ -222,7 +230,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       << "; tetra=" << options.tetra << "; spacing=" << options.spacing
       << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
       << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
-      << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering);
+      << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)
+      << "; occlusion=" << occlusionModeName(options.occlusion.mode);
+  if (options.occlusion.mode == OcclusionMode::kAuto)
+    gen << "; min_agreement=" << options.occlusion.minAgreement;
   level.generator = gen.str();
   return level;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/scene/scene.h"
 
@@ -26,6 +27,10 @@ struct PipelineOptions {
   double maxSpacing = 10.0;    // voxel: coarsest open-space cell, metres
   double fillerSpacing = 4.0;  // voxel: open-space filler lattice, metres (0 = none)
   std::string tetra = "cgal";  // "cgal" | "tetgen"
+
+  // Per-tet occlusion against light leaking, built after the SH bake and stored in the level
+  // (occlusion/build_occlusion.h). occlusion.mode kNone stores nothing; threads and progress follow `bake`.
+  OcclusionOptions occlusion;
 };
 
 struct PipelineStats {
@@ -35,6 +40,7 @@ struct PipelineStats {
   size_t importedProbes = 0;  // --import-sh
   BakeStats bake;             // rays and time of the path tracer (zero when the SH were imported)
   DeringStats dering;
+  OcclusionStats occlusion;  // zero when occlusion.mode is kNone
 
   // Placement by kind (voxel placement; counts after push-out and merge) and tet quality.
   size_t surfaceProbes = 0, volumeProbes = 0, openProbes = 0, fillerProbes = 0;  // filler: lattice + sliver
