@@ -13,6 +13,8 @@
 // path-independent.
 #include "tetraprobe/runtime/query.h"
 
+#include "tetraprobe/runtime/occlusion.h"
+
 #include "tetraprobe/runtime/outer_cells.h"
 
 #include <algorithm>
@@ -421,11 +423,16 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
   if (tetCache) *tetCache = loc.tet;
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level_.tets[size_t(loc.tet)];
+  glm::vec4 weights = loc.weights;
+  if (loc.outerCell < 0 && usesOcclusion()) {
+    const glm::vec3 local(world - level_.origin);
+    weights = applyOcclusion(weights, occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal));
+  }
   const ShRgb* probes[4];
   float w[4];
   for (int i = 0; i < 4; ++i) {
     probes[i] = &level_.sh[size_t(t.v[i])];
-    w[i] = loc.weights[i];
+    w[i] = weights[i];
   }
   return shIrradiance(shBlend(probes, w, 4), normal);
 }

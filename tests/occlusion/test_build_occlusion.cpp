@@ -437,5 +437,37 @@ TEST(OcclusionScene, VeachAjarFigures) {
   EXPECT_EQ(a.shadowMaps, b.shadowMaps);
 }
 
+// ProbeQuery applies the stored occlusion: with the wall z = 0.5 through the tet, a point below it ignores
+// the lit probes above (2, 3); with occlusion off (or outside the hull) the answers are the plain
+// interpolation.
+TEST(Occlusion, ProbeQueryIgnoresProbesBehindTheWall) {
+  Scene s = test::emptyScene();
+  test::addAxisQuad(s, 2, 0.5f, {-1, -1}, {2, 2});
+  const SceneTracer tracer(s);
+  Level level = test::makeLevel(test::regularTet());
+  for (int p = 0; p < 4; ++p) level.sh[size_t(p)] = ShRgb{};
+  level.sh[2].c[0] = level.sh[3].c[0] = glm::vec3(1.0f);  // only the probes above the wall are lit
+  level.occlusion = buildOcclusion(tracer, level, quiet());
+  ASSERT_FALSE(level.occlusion.empty());
+  ProbeQuery query(level);
+  ASSERT_TRUE(query.usesOcclusion());
+  const glm::dvec3 below(0.5, 0.5, 0.3), above(0.5, 0.5, 0.7), outside(0.5, 0.5, -3.0);
+  const glm::vec3 up(0, 0, 1), down(0, 0, -1);
+  EXPECT_EQ(query.irradiance(below, down), glm::vec3(0.0f));  // behind the wall: the far probes drop out
+  EXPECT_EQ(query.irradiance(below, up), glm::vec3(0.0f));
+  EXPECT_GT(query.irradiance(above, up).x, 0.0f);
+  const glm::vec3 outsideOn = query.irradiance(outside, down);
+  const glm::dvec3 worlds[3] = {below, above, outside};
+  const glm::vec3 normals[3] = {down, up, down};
+  glm::vec3 batch[3];
+  query.irradianceBatch(worlds, normals, batch, 3, 2);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(batch[i], query.irradiance(worlds[i], normals[i]));
+
+  query.setUseOcclusion(false);
+  EXPECT_FALSE(query.usesOcclusion());
+  EXPECT_GT(query.irradiance(below, down).x, 0.0f);       // the leak occlusion removes
+  EXPECT_EQ(query.irradiance(outside, down), outsideOn);  // outer-cell answers are unchanged
+}
+
 }  // namespace
 }  // namespace tetraprobe

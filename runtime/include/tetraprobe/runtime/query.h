@@ -65,11 +65,19 @@ class ProbeQuery {
 
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
   // given it is read as the walk's starting hint and updated with the tet found (per-object caching).
+  // Inside the hull, the level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point
+  // cannot see: w = applyOcclusion(weights, occlusionVisibility(level, occlusion, tet, local, normal)), the
+  // normal biasing the point off its surface (a zero normal: no bias). Outer-cell answers are unchanged.
   glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;
 
   // Batch form: out[i] = irradiance(world[i], normal[i]). Runs on up to `threads` threads (0 = all cores).
   void irradianceBatch(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t count,
                        int threads = 0) const;
+
+  // Occlusion on (the default) or off (every probe visible, as if the level stored none): for comparisons.
+  // Not to be changed while other threads query.
+  void setUseOcclusion(bool use) { useOcclusion_ = use; }
+  bool usesOcclusion() const { return useOcclusion_ && !level_.occlusion.empty(); }
 
   const Level& level() const { return level_; }
   const StartGrid& startGrid() const { return grid_; }
@@ -89,6 +97,7 @@ class ProbeQuery {
   StartGrid grid_;
   std::vector<OuterCell> ownCells_;
   CellGrid ownGrid_;
+  bool useOcclusion_ = true;
 };
 
 }  // namespace tetraprobe
