@@ -115,9 +115,16 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
   const uint64_t probeBytes = level.probes.size() * (sizeof(glm::vec3) + sizeof(ShRgb));
   const glm::dvec3 origin = level.origin;
 
+  // ProbeQuery applies the level's stored occlusion, if any; then `tet (no occlusion)` shows what it removes.
   auto query = std::make_shared<ProbeQuery>(level);
-  methods.push_back({"tet", probeBytes + level.tets.size() * sizeof(Tet),
+  methods.push_back({"tet", probeBytes + level.tets.size() * sizeof(Tet) + level.occlusion.bytes(),
                      [query](const glm::dvec3& p, const glm::vec3& n) { return query->irradiance(p, n); }});
+  if (!level.occlusion.empty()) {
+    auto plain = std::make_shared<ProbeQuery>(level);
+    plain->setUseOcclusion(false);
+    methods.push_back({"tet (no occlusion)", probeBytes + level.tets.size() * sizeof(Tet),
+                       [plain](const glm::dvec3& p, const glm::vec3& n) { return plain->irradiance(p, n); }});
+  }
 
   auto nearest = std::make_shared<NearestProbe>(level);
   const Level* lv = &level;

@@ -1,4 +1,5 @@
 // `tetraprobe eval SCENE LEVEL.tpb`: probe lookup error against path-traced ground truth, with cost.
+#include <algorithm>
 #include <cstdio>
 
 #include "args.h"
@@ -7,6 +8,7 @@
 #include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/file_io.h"
+#include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
@@ -22,8 +24,8 @@ int cmdEval(int argc, char** argv) {
        {"--seed", "", "N", "random seed for points and paths", "1"},
        {"--threads", "", "N", "worker threads, 0 = all cores", "0"},
        {"--occlusion", "", "auto|none|planes|shadow-maps",
-        "also score tet+occlusion, with occlusion data built from the scene in this mode (the level file "
-        "does not store it yet)",
+        "for a level without stored occlusion: also score tet+occlusion, with occlusion data built from the "
+        "scene in this mode (a level that stores occlusion scores `tet` with it and `tet (no occlusion)`)",
         "auto"},
        {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
         "0.98"},
@@ -52,6 +54,8 @@ int cmdEval(int argc, char** argv) {
   OcclusionMode occMode;
   if (!parseOcclusionMode(args.str("--occlusion"), occMode))
     throw UsageError("--occlusion must be auto, none, planes or shadow-maps");
+  const bool stored = !level.occlusion.empty();
+  if (stored) occMode = OcclusionMode::kNone;  // the level's own data is scored through `tet`
   if (occMode != OcclusionMode::kNone) {
     OcclusionOptions occOpt;
     occOpt.mode = occMode;
@@ -70,10 +74,16 @@ int cmdEval(int argc, char** argv) {
         "agreement %.3f\n",
         occlusionModeName(occMode), occStats.tetsWithGeometry, occStats.none, occStats.planeTets,
         occStats.shadowMapTets, occStats.bytes, occStats.agreement);
-  std::printf("  %-14s %10s %14s %13s %10s %12s %12s\n", "method", "relmse", "mean_rel_err", "p95_rel_err",
+  if (stored) {
+    size_t counts[3] = {0, 0, 0};
+    for (const TetOcclusion& rec : level.occlusion.tets) ++counts[std::min<uint32_t>(rec.kind(), 2)];
+    std::printf("  occlusion (stored in the level): %zu none, %zu planes, %zu shadow maps; %zu bytes\n",
+                counts[0], counts[1], counts[2], level.occlusion.bytes());
+  }
+  std::printf("  %-18s %10s %14s %13s %10s %12s %12s\n", "method", "relmse", "mean_rel_err", "p95_rel_err",
               "leak", "ns/query", "bytes");
   for (const auto& m : report.methods)
-    std::printf("  %-14s %10.4f %14.4f %13.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
+    std::printf("  %-18s %10.4f %14.4f %13.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
                 m.meanRelError, m.p95RelError, m.leak, m.cpuNsPerQuery, (unsigned long long)m.bytes);
 
   if (args.has("--points-out")) {
@@ -117,7 +127,9 @@ int cmdEval(int argc, char** argv) {
                           {"mean_rel_stderr", report.meanRelStderr},
                           {"seconds", report.referenceSeconds}}},
                         {"methods", methods}};
-    if (occMode != OcclusionMode::kNone)
+    if (stored)
+      j["occlusion"] = {{"mode", "stored"}, {"bytes", level.occlusion.bytes()}};
+    else if (occMode != OcclusionMode::kNone)
       j["occlusion"] = {{"mode", occlusionModeName(occMode)},
                         {"none", occStats.none},
                         {"planes", occStats.planeTets},

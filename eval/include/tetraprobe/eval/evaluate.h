@@ -71,7 +71,9 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
 // Scores one method against the report's references and appends it to report.methods.
 void scoreMethod(EvalReport& report, const LookupMethod& method);
 
-// The standard methods for a level: `tet` (ProbeQuery) and `nearest` (nearest probe's SH).
+// The standard methods for a level: `tet` (ProbeQuery, with the level's stored occlusion when it has some),
+// `tet (no occlusion)` (only for a level storing occlusion: ProbeQuery with it disabled) and `nearest`
+// (nearest probe's SH).
 std::vector<LookupMethod> standardMethods(const Level& level);
 
 // `tet+occlusion`: the tet lookup with per-tet occlusion data (runtime/occlusion.h) dropping occluded probes.
