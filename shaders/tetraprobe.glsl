@@ -22,7 +22,7 @@
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
 //   rounding), outside too (the outer cells' answer does not depend on the hull face the walk leaves by).
 // - Bindings: the five read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
-//   TETRAPROBE_BINDING + 0..4 (defaults 0 and 0..4; define the macros before including to move them).
+//   TETRAPROBE_BINDING + 0..5 (defaults 0 and 0..5; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
 //   (runtime/vulkan_upload.h).
 // - Including: the shader that includes this file needs `#extension GL_GOOGLE_include_directive : require`
@@ -529,12 +529,154 @@ void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
   }
 }
 
-// Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`.
+// --- occlusion: mirrors runtime/src/occlusion.cpp (evaluateTetOcclusion, biasWeights, applyOcclusion) ---
+const float TETRAPROBE_OCC_BIAS = 0.03, TETRAPROBE_OCC_PLANE_HALF = 0.02, TETRAPROBE_OCC_SHADOW_HALF = 0.01,
+            TETRAPROBE_OCC_FALLBACK = 1e-3;
+
+float tetraprobeOccSmooth(float e0, float e1, float x) {  // as the CPU's smoothStep, operation for operation
+  precise float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+  precise float r = t * t * (3.0 - 2.0 * t);
+  return r;
+}
+
+vec4 tetraprobeOccBias(int t, vec4 w, vec3 n) {
+  vec3 g0 = tetraprobeTets[t].row[0].xyz, g1 = tetraprobeTets[t].row[1].xyz, g2 = tetraprobeTets[t].row[2].xyz;
+  precise vec3 gs = g0 + g1 + g2;
+  precise vec4 gn = vec4(dot(g0, n), dot(g1, n), dot(g2, n), -dot(gs, n));
+  float m = max(max(abs(gn.x), abs(gn.y)), max(abs(gn.z), abs(gn.w)));
+  if (!(m > 0.0) || isinf(m) || isnan(m)) return w;
+  precise vec4 r = w + gn * (TETRAPROBE_OCC_BIAS / m);
+  return r;
+}
+
+uint tetraprobeOccByte(uint word0, uint k) {
+  return (tetraprobeOccData[word0 + k / 4u] >> (8u * (k % 4u))) & 0xFFu;
+}
+uint tetraprobeOccVertex(int a, int b) { return uint(b * 5 - b * (b - 1) / 2 + a); }
+
+float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's first uint; > 1: nothing met
+  u = (isnan(u) || isinf(u)) ? 0.0 : clamp(u, 0.0, 1.0);
+  v = (isnan(v) || isinf(v)) ? 0.0 : clamp(v, 0.0, 1.0);
+  if (u + v > 1.0) {
+    precise float s = u + v;
+    u /= s;
+    v /= s;
+  }
+  precise float x = 4.0 * u, y = 4.0 * v;
+  int iu = min(int(x), 3), iv = min(int(y), 3);
+  bool upper = (x - float(iu)) + (y - float(iv)) > 1.0;
+  if (iu + iv >= 3) {
+    iu = min(iu, 3 - iv);
+    upper = false;
+  }
+  precise float fu = 4.0 * u - float(iu), fv = 4.0 * v - float(iv);
+  uint corner[3];
+  precise float b[3];
+  if (upper) {
+    corner[0] = tetraprobeOccVertex(iu + 1, iv + 1); b[0] = fu + fv - 1.0;
+    corner[1] = tetraprobeOccVertex(iu, iv + 1); b[1] = 1.0 - fu;
+    corner[2] = tetraprobeOccVertex(iu + 1, iv); b[2] = 1.0 - fv;
+  } else {
+    corner[0] = tetraprobeOccVertex(iu, iv); b[0] = 1.0 - fu - fv;
+    corner[1] = tetraprobeOccVertex(iu + 1, iv); b[1] = fu;
+    corner[2] = tetraprobeOccVertex(iu, iv + 1); b[2] = fv;
+  }
+  precise float inv = 0.0, sum = 0.0;
+  bool anyHit = false;
+  for (int k = 0; k < 3; ++k) {
+    b[k] = max(b[k], 0.0);
+    sum = sum + b[k];
+    uint q = tetraprobeOccByte(word0, corner[k]);
+    anyHit = anyHit || q != 255u;
+    precise float d = q == 255u ? 1.0 : max(float(q), 0.5) / 254.0;
+    inv = inv + b[k] / d;
+  }
+  if (!anyHit) return 2.0;
+  precise float r = sum > 0.0 ? sum / inv : 1.0;
+  return r;
+}
+
+// Per-probe visibility of tet t's probes from local point x with surface normal n (occlusionVisibility).
+vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
+  if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
+  uint header = tetraprobeOccData[2u * uint(t)], cells = tetraprobeOccData[2u * uint(t) + 1u];
+  uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
+  if (kind != 1u && kind != 2u) return vec4(1.0);
+  precise vec4 w;
+  for (int i = 0; i < 3; ++i) {
+    vec4 r = tetraprobeTets[t].row[i];
+    w[i] = r.x * x.x + r.y * x.y + r.z * x.z + r.w;
+  }
+  w[3] = 1.0 - w[0] - w[1] - w[2];
+  if (isnan(n.x) || isnan(n.y) || isnan(n.z) || isinf(n.x) || isinf(n.y) || isinf(n.z)) n = vec3(0.0);
+  w = tetraprobeOccBias(t, w, n);
+  vec4 vis = vec4(1.0);
+  if (kind == 1u) {
+    if (count == 0u) return vec4(1.0);
+    float s[3] = float[3](1.0, 1.0, 1.0);
+    for (uint k = 0u; k < count; ++k) {
+      uint o = tetraprobeOccPlaneOffset + 4u * (offset + k);
+      vec4 c = uintBitsToFloat(uvec4(tetraprobeOccData[o], tetraprobeOccData[o + 1u], tetraprobeOccData[o + 2u],
+                                     tetraprobeOccData[o + 3u]));
+      precise float d = c.x * w.x + c.y * w.y + c.z * w.z + c.w * w.w;
+      s[k] = tetraprobeOccSmooth(-TETRAPROBE_OCC_PLANE_HALF, TETRAPROBE_OCC_PLANE_HALF, d);
+    }
+    precise vec4 acc = vec4(0.0);
+    for (uint cell = 0u; cell < (1u << count); ++cell) {
+      precise float wt = 1.0;
+      for (uint k = 0u; k < count; ++k) wt = wt * ((((cell >> k) & 1u) != 0u) ? s[k] : 1.0 - s[k]);
+      uint mask = (cells >> (4u * cell)) & 15u;
+      for (int i = 0; i < 4; ++i) acc[i] = acc[i] + ((((mask >> uint(i)) & 1u) != 0u) ? wt : 0.0);
+    }
+    vis = clamp(acc, 0.0, 1.0);
+  } else {
+    uint block = tetraprobeOccShadowOffset + 16u * offset;
+    for (int i = 0; i < 4; ++i) {
+      int j0 = i == 0 ? 1 : 0, j1 = i <= 1 ? 2 : 1, j2 = i <= 2 ? 3 : 2;
+      float a = max(w[j0], 0.0), b = max(w[j1], 0.0), c = max(w[j2], 0.0);
+      precise float sum = a + b + c;
+      precise float u = sum > 0.0 ? b / sum : 1.0 / 3.0, v = sum > 0.0 ? c / sum : 1.0 / 3.0;
+      float depth = tetraprobeOccDepth(block + 4u * uint(i), u, v);
+      if (depth > 1.0) continue;
+      precise float f = 1.0 - w[i];
+      precise float lo = depth - TETRAPROBE_OCC_SHADOW_HALF, hi = depth + TETRAPROBE_OCC_SHADOW_HALF;
+      vis[i] = 1.0 - tetraprobeOccSmooth(lo, hi, f);
+    }
+  }
+  if (any(isnan(vis)) || any(isinf(vis))) return vec4(1.0);
+  return vis;
+}
+
+// applyOcclusion: weights * visibility renormalized; below the fallback sum blended into the plain weights.
+vec4 tetraprobeOccApply(vec4 weights, vec4 visibility) {
+  precise vec4 w, v;
+  precise float sumW = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    w[i] = (!isnan(weights[i]) && !isinf(weights[i]) && weights[i] > 0.0) ? weights[i] : 0.0;
+    v[i] = (!isnan(visibility[i]) && !isinf(visibility[i])) ? clamp(visibility[i], 0.0, 1.0) : 1.0;
+    sumW = sumW + w[i];
+  }
+  if (!(sumW > 0.0) || isinf(sumW)) return vec4(0.25);
+  w = w / sumW;
+  precise vec4 o = w * v;
+  precise float s = o.x + o.y + o.z + o.w;
+  if (s >= TETRAPROBE_OCC_FALLBACK) return o / s;
+  precise float a = s / TETRAPROBE_OCC_FALLBACK;
+  precise vec4 visible = s > 0.0 ? o / s : vec4(0.0);
+  precise vec4 r = a * visible + (1.0 - a) * w;
+  return r;
+}
+
+// Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. Inside the hull
+// the level's occlusion (if any) drops the probes the point cannot see, as ProbeQuery::irradiance does.
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
   if (loc.tet < 0) return vec3(0.0);
+  vec4 w = loc.weights;
+  if (tetraprobeOccTetCount != 0u && loc.outerCell < 0)
+    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal));
   vec3 c[9];
-  tetraprobeBlendSh(loc.tet, loc.weights, c);
+  tetraprobeBlendSh(loc.tet, w, c);
   return tetraprobeShIrradiance(c, normal);
 }
 

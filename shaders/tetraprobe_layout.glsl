@@ -7,6 +7,7 @@
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
 //   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 128 bytes per cell
 //   TETRAPROBE_BINDING + 4  TetraprobeCells  the sparse cell grid + BSP: a 32-byte header, then int data
+//   TETRAPROBE_BINDING + 5  TetraprobeOcclusion  per-tet occlusion: a 16-byte header, then uint data
 // Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
 #ifndef TETRAPROBE_LAYOUT_GLSL
 #define TETRAPROBE_LAYOUT_GLSL
@@ -75,6 +76,17 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly 
   int tetraprobeCellNodeOffset;  // offset 24
   int tetraprobeCellLeafOffset;  // offset 28
   int tetraprobeCellData[];      // offset 32
+};
+
+// Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[2 t], data[2 t + 1]: tet t's
+// record (header, cells); planes from tetraprobeOccPlaneOffset (4 float bits each); shadow-map blocks from
+// tetraprobeOccShadowOffset (16 uints each, bytes little-endian). tetraprobeOccTetCount 0: no occlusion.
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {
+  uint tetraprobeOccTetCount;      // offset 0
+  uint tetraprobeOccPlaneOffset;   // offset 4
+  uint tetraprobeOccShadowOffset;  // offset 8
+  uint tetraprobeOccPad;           // offset 12
+  uint tetraprobeOccData[];        // offset 16
 };
 
 #endif  // TETRAPROBE_LAYOUT_GLSL

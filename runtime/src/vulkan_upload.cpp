@@ -11,7 +11,8 @@ namespace tetraprobe {
 namespace {
 
 const char* bindingName(int i) {
-  static const char* const kNames[kGpuBindingCount] = {"tets", "sh", "grid", "outer cells", "cell grid"};
+  static const char* const kNames[kGpuBindingCount] = {"tets",        "sh",        "grid",
+                                                       "outer cells", "cell grid", "occlusion"};
   return kNames[i];
 }
 
@@ -179,6 +180,20 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   appendBytes(data[kGpuBindingCells], cellGrid.slots.data(), cellGrid.slots.size());
   appendBytes(data[kGpuBindingCells], cellGrid.nodes.data(), cellGrid.nodes.size());
   appendBytes(data[kGpuBindingCells], cellGrid.leafTets.data(), cellGrid.leafTets.size());
+
+  const LevelOcclusion& occ = level.occlusion;
+  GpuOcclusionHeader occHeader{};
+  if (!occ.empty() && occ.tets.size() == level.tets.size()) {
+    occHeader.tetCount = uint32_t(occ.tets.size());
+    occHeader.planeOffset = uint32_t(2 * occ.tets.size());
+    occHeader.shadowOffset = uint32_t(occHeader.planeOffset + 4 * occ.planes.size());
+  }
+  appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
+  if (occHeader.tetCount > 0) {
+    appendBytes(data[kGpuBindingOcclusion], occ.tets.data(), occ.tets.size());
+    appendBytes(data[kGpuBindingOcclusion], occ.planes.data(), occ.planes.size());
+    appendBytes(data[kGpuBindingOcclusion], occ.shadowMaps.data(), occ.shadowMaps.size());
+  }
 
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physicalDevice, &props);

@@ -31,15 +31,13 @@ std::set<std::pair<uint32_t, uint32_t>> descriptorSlots(const uint32_t* words, s
   return slots;
 }
 
-// TETRAPROBE_SET 2 / TETRAPROBE_BINDING 5 put tets, SH, grid, outer cells and cell grid at set 2,
-// bindings 5..9 (the layout levelDescriptorBindings(stages, 5, ...) describes), and nothing else.
+// TETRAPROBE_SET 2 / TETRAPROBE_BINDING 5 put tets, SH, grid, outer cells, cell grid and occlusion at set 2,
+// bindings 5..10 (the layout levelDescriptorBindings(stages, 5, ...) describes), and nothing else.
 TEST(GlslInclude, BindingMacrosMoveTheBuffers) {
   const auto slots = descriptorSlots(kSpirv_engine_include_frag, sizeof(kSpirv_engine_include_frag) / 4);
-  const std::set<std::pair<uint32_t, uint32_t>> expected = {{2u, 5u + kGpuBindingTets},
-                                                            {2u, 5u + kGpuBindingSh},
-                                                            {2u, 5u + kGpuBindingGrid},
-                                                            {2u, 5u + kGpuBindingOuterCells},
-                                                            {2u, 5u + kGpuBindingCells}};
+  const std::set<std::pair<uint32_t, uint32_t>> expected = {
+      {2u, 5u + kGpuBindingTets},       {2u, 5u + kGpuBindingSh},    {2u, 5u + kGpuBindingGrid},
+      {2u, 5u + kGpuBindingOuterCells}, {2u, 5u + kGpuBindingCells}, {2u, 5u + kGpuBindingOcclusion}};
   EXPECT_EQ(slots, expected);
 }
 

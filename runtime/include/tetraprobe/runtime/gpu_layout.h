@@ -20,7 +20,9 @@ enum GpuBinding : uint32_t {
   kGpuBindingGrid = 2,        // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
   kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
   kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
-  kGpuBindingCount = 5,
+  kGpuBindingOcclusion =
+      5,  // TetraprobeOcclusion: GpuOcclusionHeader, then uint32 data[] (records, planes, maps)
+  kGpuBindingCount = 6,
 };
 
 // The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; vec4 row[3]; }`.
@@ -93,5 +95,17 @@ static_assert(sizeof(GpuCellGridHeader) == 32 && offsetof(GpuCellGridHeader, cel
               "TetraprobeCells header: 32 bytes, data[] at offset 32");
 static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 8 * sizeof(int32_t),
               "TetraprobeCells: 4 ints a slot, 8 ints a node");
+
+// TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
+// after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes
+// from planeOffset (4 float bits each); the shadow-map blocks from shadowOffset (16 uints each, little-endian
+// bytes). tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
+struct GpuOcclusionHeader {
+  uint32_t tetCount;      // uint tetraprobeOccTetCount: 0 = no occlusion
+  uint32_t planeOffset;   // uint tetraprobeOccPlaneOffset
+  uint32_t shadowOffset;  // uint tetraprobeOccShadowOffset
+  uint32_t pad;
+};
+static_assert(sizeof(GpuOcclusionHeader) == 16, "TetraprobeOcclusion header: 16 bytes, data[] at offset 16");
 
 }  // namespace tetraprobe
