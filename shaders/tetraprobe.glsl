@@ -667,13 +667,14 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility) {
   return r;
 }
 
-// Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. Inside the hull
-// the level's occlusion (if any) drops the probes the point cannot see, as ProbeQuery::irradiance does.
+// Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
+// occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
+// outer cell) outside it, as ProbeQuery::irradiance does.
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
   if (loc.tet < 0) return vec3(0.0);
   vec4 w = loc.weights;
-  if (tetraprobeOccTetCount != 0u && loc.outerCell < 0)
+  if (tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
     w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal));
   vec3 c[9];
   tetraprobeBlendSh(loc.tet, w, c);

@@ -424,7 +424,10 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level_.tets[size_t(loc.tet)];
   glm::vec4 weights = loc.weights;
-  if (loc.outerCell < 0 && usesOcclusion()) {
+  // Outside the hull the outer cell's weights sit on its hull tet's probes; that tet's occlusion still tells
+  // which of them the point can see (a wall cutting the tet usually extends past the hull), so it applies
+  // too.
+  if (usesOcclusion()) {
     const glm::vec3 local(world - level_.origin);
     weights = applyOcclusion(weights, occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal));
   }

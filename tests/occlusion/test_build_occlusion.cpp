@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "test_levels.h"
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
@@ -438,8 +440,8 @@ TEST(OcclusionScene, VeachAjarFigures) {
 }
 
 // ProbeQuery applies the stored occlusion: with the wall z = 0.5 through the tet, a point below it ignores
-// the lit probes above (2, 3); with occlusion off (or outside the hull) the answers are the plain
-// interpolation.
+// the lit probes above (2, 3), inside the hull and outside it (the outer cell's answer takes its hull tet's
+// occlusion); with occlusion off the answers are the plain interpolation.
 TEST(Occlusion, ProbeQueryIgnoresProbesBehindTheWall) {
   Scene s = test::emptyScene();
   test::addAxisQuad(s, 2, 0.5f, {-1, -1}, {2, 2});
@@ -451,12 +453,16 @@ TEST(Occlusion, ProbeQueryIgnoresProbesBehindTheWall) {
   ASSERT_FALSE(level.occlusion.empty());
   ProbeQuery query(level);
   ASSERT_TRUE(query.usesOcclusion());
-  const glm::dvec3 below(0.5, 0.5, 0.3), above(0.5, 0.5, 0.7), outside(0.5, 0.5, -3.0);
+  // `outside`: 0.3 m beyond the face (0, 1, 2) (outward normal (1,-1,-1)/sqrt 3) from its centroid, at
+  // z = 0.16, below the wall; its outer cell interpolates lit probe 2 unless occlusion hides it.
+  const glm::dvec3 below(0.5, 0.5, 0.3), above(0.5, 0.5, 0.7),
+      outside(2.0 / 3.0 + 0.3 / std::sqrt(3.0), 1.0 / 3.0 - 0.3 / std::sqrt(3.0),
+              1.0 / 3.0 - 0.3 / std::sqrt(3.0));
   const glm::vec3 up(0, 0, 1), down(0, 0, -1);
   EXPECT_EQ(query.irradiance(below, down), glm::vec3(0.0f));  // behind the wall: the far probes drop out
   EXPECT_EQ(query.irradiance(below, up), glm::vec3(0.0f));
   EXPECT_GT(query.irradiance(above, up).x, 0.0f);
-  const glm::vec3 outsideOn = query.irradiance(outside, down);
+  EXPECT_EQ(query.irradiance(outside, down), glm::vec3(0.0f));  // outside, still below the wall
   const glm::dvec3 worlds[3] = {below, above, outside};
   const glm::vec3 normals[3] = {down, up, down};
   glm::vec3 batch[3];
@@ -465,8 +471,8 @@ TEST(Occlusion, ProbeQueryIgnoresProbesBehindTheWall) {
 
   query.setUseOcclusion(false);
   EXPECT_FALSE(query.usesOcclusion());
-  EXPECT_GT(query.irradiance(below, down).x, 0.0f);       // the leak occlusion removes
-  EXPECT_EQ(query.irradiance(outside, down), outsideOn);  // outer-cell answers are unchanged
+  EXPECT_GT(query.irradiance(below, down).x, 0.0f);    // the leak occlusion removes
+  EXPECT_GT(query.irradiance(outside, down).x, 0.0f);  // outside: the extrapolated leak
 }
 
 }  // namespace

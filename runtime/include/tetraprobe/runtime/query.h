@@ -65,9 +65,10 @@ class ProbeQuery {
 
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
   // given it is read as the walk's starting hint and updated with the tet found (per-object caching).
-  // Inside the hull, the level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point
-  // cannot see: w = applyOcclusion(weights, occlusionVisibility(level, occlusion, tet, local, normal)), the
-  // normal biasing the point off its surface (a zero normal: no bias). Outer-cell answers are unchanged.
+  // The level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point cannot see:
+  // w = applyOcclusion(weights, occlusionVisibility(level, occlusion, tet, local, normal)), the normal biasing
+  // the point off its surface (a zero normal: no bias). Outside the hull `tet` is the outer cell's hull tet,
+  // whose occlusion applies to the cell's weights the same way.
   glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;
 
   // Batch form: out[i] = irradiance(world[i], normal[i]). Runs on up to `threads` threads (0 = all cores).
