@@ -294,8 +294,8 @@ vec3 tetraprobeOuterWeights(int k, vec3 x, out bool valid) {
   vec3 n2 = tetraprobeOuterCells[k].n[2].xyz;
   precise vec3 a = p0 - p2, ad = n0 - n2, b = p1 - p2, bd = n1 - n2, y = x - p2;
   precise vec3 axb = cross(a, b), mixed = cross(a, bd) + cross(ad, b), adxbd = cross(ad, bd);
-  precise vec4 c = vec4(dot(axb, y), dot(mixed, y) - dot(axb, n2), dot(adxbd, y) - dot(mixed, n2),
-                        -dot(adxbd, n2));
+  precise vec4 c =
+      vec4(dot(axb, y), dot(mixed, y) - dot(axb, n2), dot(adxbd, y) - dot(mixed, n2), -dot(adxbd, n2));
   float edge = max(max(length(a), length(b)), length(p0 - p1));
   float t;
   valid = tetraprobeSmallestRoot(c, length(y) + edge, t);
@@ -398,7 +398,8 @@ int tetraprobeCellStartTet(vec3 x) {
   for (uint p = 0u; p < tetraprobeCellMaxProbe; ++p) {
     int b = 4 * int(h);
     if (tetraprobeCellData[b] == int(0x80000000u)) break;
-    if (tetraprobeCellData[b] == key.x && tetraprobeCellData[b + 1] == key.y && tetraprobeCellData[b + 2] == key.z) {
+    if (tetraprobeCellData[b] == key.x && tetraprobeCellData[b + 1] == key.y &&
+        tetraprobeCellData[b + 2] == key.z) {
       node = tetraprobeCellData[b + 3];
       found = true;
       break;
@@ -408,8 +409,8 @@ int tetraprobeCellStartTet(vec3 x) {
   if (!found) return -1;
   for (int d = 0; d < 256 && node >= 0; ++d) {
     int b = tetraprobeCellNodeOffset + 8 * node;
-    vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1], tetraprobeCellData[b + 2],
-                                   tetraprobeCellData[b + 3]));
+    vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1],
+                                   tetraprobeCellData[b + 2], tetraprobeCellData[b + 3]));
     precise float s = pl.x * x.x + pl.y * x.y + pl.z * x.z + pl.w;
     node = tetraprobeCellData[b + 4 + (s >= 0.0 ? 1 : 0)];
   }
@@ -493,8 +494,8 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
   TetraprobeLocation loc;
   int exitFace = -1;
   // A hint gets a short budget, then the start grid the full one, then the scan.
-  if (hint >= 0 && hint < tetraprobeTetCount && tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) &&
-      exitFace < 0)
+  if (hint >= 0 && hint < tetraprobeTetCount &&
+      tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) && exitFace < 0)
     return loc;
   // The cell grid's leaf names the start (the coarse start grid where the cell is absent).
   int start = tetraprobeCellStartTet(x);
@@ -540,7 +541,8 @@ float tetraprobeOccSmooth(float e0, float e1, float x) {  // as the CPU's smooth
 }
 
 vec4 tetraprobeOccBias(int t, vec4 w, vec3 n) {
-  vec3 g0 = tetraprobeTets[t].row[0].xyz, g1 = tetraprobeTets[t].row[1].xyz, g2 = tetraprobeTets[t].row[2].xyz;
+  vec3 g0 = tetraprobeTets[t].row[0].xyz, g1 = tetraprobeTets[t].row[1].xyz,
+       g2 = tetraprobeTets[t].row[2].xyz;
   precise vec3 gs = g0 + g1 + g2;
   precise vec4 gn = vec4(dot(g0, n), dot(g1, n), dot(g2, n), -dot(gs, n));
   float m = max(max(abs(gn.x), abs(gn.y)), max(abs(gn.z), abs(gn.w)));
@@ -552,7 +554,9 @@ vec4 tetraprobeOccBias(int t, vec4 w, vec3 n) {
 uint tetraprobeOccByte(uint word0, uint k) {
   return (tetraprobeOccData[word0 + k / 4u] >> (8u * (k % 4u))) & 0xFFu;
 }
-uint tetraprobeOccVertex(int a, int b) { return uint(b * 5 - b * (b - 1) / 2 + a); }
+uint tetraprobeOccVertex(int a, int b) {
+  return uint(b * 5 - b * (b - 1) / 2 + a);
+}
 
 float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's first uint; > 1: nothing met
   u = (isnan(u) || isinf(u)) ? 0.0 : clamp(u, 0.0, 1.0);
@@ -573,13 +577,19 @@ float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's 
   uint corner[3];
   precise float b[3];
   if (upper) {
-    corner[0] = tetraprobeOccVertex(iu + 1, iv + 1); b[0] = fu + fv - 1.0;
-    corner[1] = tetraprobeOccVertex(iu, iv + 1); b[1] = 1.0 - fu;
-    corner[2] = tetraprobeOccVertex(iu + 1, iv); b[2] = 1.0 - fv;
+    corner[0] = tetraprobeOccVertex(iu + 1, iv + 1);
+    b[0] = fu + fv - 1.0;
+    corner[1] = tetraprobeOccVertex(iu, iv + 1);
+    b[1] = 1.0 - fu;
+    corner[2] = tetraprobeOccVertex(iu + 1, iv);
+    b[2] = 1.0 - fv;
   } else {
-    corner[0] = tetraprobeOccVertex(iu, iv); b[0] = 1.0 - fu - fv;
-    corner[1] = tetraprobeOccVertex(iu + 1, iv); b[1] = fu;
-    corner[2] = tetraprobeOccVertex(iu, iv + 1); b[2] = fv;
+    corner[0] = tetraprobeOccVertex(iu, iv);
+    b[0] = 1.0 - fu - fv;
+    corner[1] = tetraprobeOccVertex(iu + 1, iv);
+    b[1] = fu;
+    corner[2] = tetraprobeOccVertex(iu, iv + 1);
+    b[2] = fv;
   }
   precise float inv = 0.0, sum = 0.0;
   bool anyHit = false;
@@ -616,8 +626,8 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
     float s[3] = float[3](1.0, 1.0, 1.0);
     for (uint k = 0u; k < count; ++k) {
       uint o = tetraprobeOccPlaneOffset + 4u * (offset + k);
-      vec4 c = uintBitsToFloat(uvec4(tetraprobeOccData[o], tetraprobeOccData[o + 1u], tetraprobeOccData[o + 2u],
-                                     tetraprobeOccData[o + 3u]));
+      vec4 c = uintBitsToFloat(uvec4(tetraprobeOccData[o], tetraprobeOccData[o + 1u],
+                                     tetraprobeOccData[o + 2u], tetraprobeOccData[o + 3u]));
       precise float d = c.x * w.x + c.y * w.y + c.z * w.z + c.w * w.w;
       s[k] = tetraprobeOccSmooth(-TETRAPROBE_OCC_PLANE_HALF, TETRAPROBE_OCC_PLANE_HALF, d);
     }

@@ -22,9 +22,9 @@
 // One tetrahedron. v: probe indices; n[i]: the tet across the face opposite v[i], -1 on the hull.
 // Barycentrics of local point X: w_i = dot(row[i].xyz, X) + row[i].w (i = 0..2), w_3 = 1 - w_0 - w_1 - w_2.
 struct TetraprobeTet {
-  ivec4 v;       // offset 0
-  ivec4 n;       // offset 16
-  vec4 row[3];   // offset 32; 80 bytes in all
+  ivec4 v;      // offset 0
+  ivec4 n;      // offset 16
+  vec4 row[3];  // offset 32; 80 bytes in all
 };
 
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly buffer TetraprobeTets {
@@ -60,7 +60,7 @@ struct TetraprobeOuterCell {
 };
 
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly buffer TetraprobeOuterCells {
-  int tetraprobeOuterCellCount;                 // offset 0 (0: no outer cells, clamped hull-tet answers)
+  int tetraprobeOuterCellCount;                // offset 0 (0: no outer cells, clamped hull-tet answers)
   TetraprobeOuterCell tetraprobeOuterCells[];  // offset 16
 };
 

@@ -8,25 +8,25 @@
 #ifndef TETRAPROBE_SH_GLSL
 #define TETRAPROBE_SH_GLSL
 
-const float kTetraprobeY00 = 0.28209479177387814;   // 1 / (2 sqrt(pi))
-const float kTetraprobeY1 = 0.4886025119029199;     // sqrt(3 / (4 pi))
-const float kTetraprobeY2n2 = 1.0925484305920792;   // sqrt(15 / pi) / 2
-const float kTetraprobeY20 = 0.31539156525252005;   // sqrt(5 / pi) / 4
-const float kTetraprobeY22 = 0.5462742152960396;    // sqrt(15 / pi) / 4
-const float kTetraprobeA0 = 3.141592653589793;      // pi
-const float kTetraprobeA1 = 2.0943951023931953;     // 2 pi / 3
-const float kTetraprobeA2 = 0.7853981633974483;     // pi / 4
+const float kTetraprobeY00 = 0.28209479177387814;  // 1 / (2 sqrt(pi))
+const float kTetraprobeY1 = 0.4886025119029199;    // sqrt(3 / (4 pi))
+const float kTetraprobeY2n2 = 1.0925484305920792;  // sqrt(15 / pi) / 2
+const float kTetraprobeY20 = 0.31539156525252005;  // sqrt(5 / pi) / 4
+const float kTetraprobeY22 = 0.5462742152960396;   // sqrt(15 / pi) / 4
+const float kTetraprobeA0 = 3.141592653589793;     // pi
+const float kTetraprobeA1 = 2.0943951023931953;    // 2 pi / 3
+const float kTetraprobeA2 = 0.7853981633974483;    // pi / 4
 
 // The 9 basis functions at unit direction d (writes each product in sh.h's order; no contraction).
-#define TETRAPROBE_SH_BASIS(y, d)                                  \
-  y[0] = kTetraprobeY00;                                           \
-  y[1] = kTetraprobeY1 * d.y;                                      \
-  y[2] = kTetraprobeY1 * d.z;                                      \
-  y[3] = kTetraprobeY1 * d.x;                                      \
-  y[4] = kTetraprobeY2n2 * d.x * d.y;                              \
-  y[5] = kTetraprobeY2n2 * d.y * d.z;                              \
-  y[6] = kTetraprobeY20 * (3.0 * d.z * d.z - 1.0);                 \
-  y[7] = kTetraprobeY2n2 * d.x * d.z;                              \
+#define TETRAPROBE_SH_BASIS(y, d)                  \
+  y[0] = kTetraprobeY00;                           \
+  y[1] = kTetraprobeY1 * d.y;                      \
+  y[2] = kTetraprobeY1 * d.z;                      \
+  y[3] = kTetraprobeY1 * d.x;                      \
+  y[4] = kTetraprobeY2n2 * d.x * d.y;              \
+  y[5] = kTetraprobeY2n2 * d.y * d.z;              \
+  y[6] = kTetraprobeY20 * (3.0 * d.z * d.z - 1.0); \
+  y[7] = kTetraprobeY2n2 * d.x * d.z;              \
   y[8] = kTetraprobeY22 * (d.x * d.x - d.y * d.y)
 
 float[9] tetraprobeShBasis(vec3 d) {

@@ -24,7 +24,8 @@ constexpr Command kCommands[] = {
     {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},
     {"eval", tetraprobe::cli::cmdEval, "measure lookup error against path-traced ground truth"},
     {"reference", tetraprobe::cli::cmdReference, "path-traced irradiance at points, to a target error"},
-    {"export-sh", tetraprobe::cli::cmdExportSh, "write a level's probes and SH as CSV (for bake --import-sh)"},
+    {"export-sh", tetraprobe::cli::cmdExportSh,
+     "write a level's probes and SH as CSV (for bake --import-sh)"},
     {"bench", tetraprobe::cli::cmdBench, "throughput against a peer in the same run (bench bake)"},
     {"diff", tetraprobe::cli::cmdDiff, "compare two images for visual regression (exit 1 when they differ)"},
 };
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
   }
   std::string names;
   for (const auto& c : kCommands) names += std::string(names.empty() ? "" : ", ") + c.name;
-  std::fprintf(stderr, "tetraprobe: error: unknown command '%s' (commands: %s)\n", name.c_str(), names.c_str());
+  std::fprintf(stderr, "tetraprobe: error: unknown command '%s' (commands: %s)\n", name.c_str(),
+               names.c_str());
   return 2;
 }
