@@ -26,9 +26,8 @@ const char* occlusionModeName(OcclusionMode mode);
 
 struct OcclusionOptions {
   OcclusionMode mode = OcclusionMode::kAuto;
-  double minAgreement =
-      0.95;                 // auto: a representation is good enough when it answers at least this
-                            // fraction of the tet's sampled (point, probe) visibility questions like the rays
+  double minAgreement = 0.95;  // auto: a representation is good enough when it answers at least this
+      // fraction of the tet's sampled (point, probe) visibility questions like the rays
   int volumeSamples = 32;   // stratified points inside each tet with geometry (no normal, no bias)
   int surfaceSamples = 32;  // points on the geometry inside each tet, each tested from both sides
   int threads = 0;          // 0 = all cores; never changes the result
