@@ -1,10 +1,14 @@
 // Test levels built from point sets (through the build side's tetrahedralization) for the runtime tests.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/query.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
 namespace tetraprobe::test {
@@ -41,6 +45,23 @@ inline Level makeLevel(const std::vector<glm::dvec3>& points, const glm::dvec3& 
   }
   level.tets = buildTetRecords(points, tetrahedralizeDelaunay(points), origin);
   return level;
+}
+
+// The interpolation a location stands for: probe -> weight (independent of which of two tets sharing a face
+// was named).
+inline std::map<int32_t, double> probeWeights(const Level& level, const Location& loc) {
+  std::map<int32_t, double> m;
+  for (int i = 0; i < 4; ++i)
+    if (loc.weights[i] != 0.0f) m[level.tets[size_t(loc.tet)].v[i]] += loc.weights[i];
+  return m;
+}
+
+// Largest weight difference between two probe -> weight maps (a probe missing from one counts as 0).
+inline double maxDifference(const std::map<int32_t, double>& a, const std::map<int32_t, double>& b) {
+  double d = 0.0;
+  for (const auto& [p, w] : a) d = std::max(d, std::abs(w - (b.count(p) ? b.at(p) : 0.0)));
+  for (const auto& [p, w] : b) d = std::max(d, std::abs(w - (a.count(p) ? a.at(p) : 0.0)));
+  return d;
 }
 
 }  // namespace tetraprobe::test

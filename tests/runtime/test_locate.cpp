@@ -15,6 +15,9 @@
 namespace tetraprobe {
 namespace {
 
+using test::maxDifference;
+using test::probeWeights;
+
 const glm::dvec3 kOrigin(12000.0, 35.0, -8000.0);  // levels live far from the world origin
 const glm::dvec3 kLo(-20.0, -5.0, -30.0), kHi(25.0, 10.0, 15.0);
 
@@ -40,22 +43,6 @@ const Level& gridLevel() {  // a 6x5x4 regular grid: cospherical everywhere, poi
       }(),
       kOrigin + glm::dvec3(5.0, 4.0, 3.0), 5);
   return level;
-}
-
-// The interpolation a location stands for: probe -> weight (independent of which of two tets sharing a face
-// was named).
-std::map<int32_t, double> probeWeights(const Level& level, const Location& loc) {
-  std::map<int32_t, double> m;
-  for (int i = 0; i < 4; ++i)
-    if (loc.weights[i] != 0.0f) m[level.tets[size_t(loc.tet)].v[i]] += loc.weights[i];
-  return m;
-}
-
-double maxDifference(const std::map<int32_t, double>& a, const std::map<int32_t, double>& b) {
-  double d = 0.0;
-  for (const auto& [p, w] : a) d = std::max(d, std::abs(w - (b.count(p) ? b.at(p) : 0.0)));
-  for (const auto& [p, w] : b) d = std::max(d, std::abs(w - (a.count(p) ? a.at(p) : 0.0)));
-  return d;
 }
 
 void expectValid(const Level& level, const Location& loc, const glm::dvec3& x) {

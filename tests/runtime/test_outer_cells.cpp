@@ -17,6 +17,9 @@
 namespace tetraprobe {
 namespace {
 
+using test::maxDifference;
+using test::probeWeights;
+
 const glm::dvec3 kOrigin(-3000.0, 12.0, 7000.0);
 
 // Random probes in a ball of radius 10 m: a round hull whose vertex normals all differ (a true cubic).
@@ -49,20 +52,6 @@ const Level& boxLevel() {
       }(),
       kOrigin, 4);
   return level;
-}
-
-std::map<int32_t, double> probeWeights(const Level& level, const Location& loc) {
-  std::map<int32_t, double> m;
-  for (int i = 0; i < 4; ++i)
-    if (loc.weights[i] != 0.0f) m[level.tets[size_t(loc.tet)].v[i]] += loc.weights[i];
-  return m;
-}
-
-double maxDifference(const std::map<int32_t, double>& a, const std::map<int32_t, double>& b) {
-  double d = 0.0;
-  for (const auto& [p, w] : a) d = std::max(d, std::abs(w - (b.count(p) ? b.at(p) : 0.0)));
-  for (const auto& [p, w] : b) d = std::max(d, std::abs(w - (a.count(p) ? a.at(p) : 0.0)));
-  return d;
 }
 
 void expectNormalized(const Location& loc) {
