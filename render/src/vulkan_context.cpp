@@ -161,6 +161,18 @@ uint32_t VulkanContext::memoryType(uint32_t typeBits, VkMemoryPropertyFlags prop
   throw std::runtime_error("no Vulkan memory type with the required properties");
 }
 
+VkDeviceMemory VulkanContext::allocateMemory(const VkMemoryRequirements& req, VkMemoryPropertyFlags props,
+                                             const char* what, CleanupStack& cleanup) const {
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = memoryType(req.memoryTypeBits, props);
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  vkCheck(vkAllocateMemory(device_, &alloc, nullptr, &mem), what);
+  VkDevice dev = device_;
+  cleanup.push([dev, mem] { vkFreeMemory(dev, mem, nullptr); });
+  return mem;
+}
+
 GpuBuffer VulkanContext::createBuffer(VkDeviceSize size, VkBufferUsageFlags usage,
                                       VkMemoryPropertyFlags props, CleanupStack& cleanup) const {
   GpuBuffer b;
@@ -175,12 +187,7 @@ GpuBuffer VulkanContext::createBuffer(VkDeviceSize size, VkBufferUsageFlags usag
   cleanup.push([dev, buf] { vkDestroyBuffer(dev, buf, nullptr); });
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(device_, b.buffer, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = memoryType(req.memoryTypeBits, props);
-  vkCheck(vkAllocateMemory(device_, &alloc, nullptr, &b.memory), "vkAllocateMemory (buffer)");
-  VkDeviceMemory mem = b.memory;
-  cleanup.push([dev, mem] { vkFreeMemory(dev, mem, nullptr); });
+  b.memory = allocateMemory(req, props, "vkAllocateMemory (buffer)", cleanup);
   vkCheck(vkBindBufferMemory(device_, b.buffer, b.memory, 0), "vkBindBufferMemory");
   return b;
 }
@@ -205,12 +212,7 @@ GpuImage VulkanContext::createImage(uint32_t width, uint32_t height, VkFormat fo
   cleanup.push([dev, img] { vkDestroyImage(dev, img, nullptr); });
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(device_, im.image, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  vkCheck(vkAllocateMemory(device_, &alloc, nullptr, &im.memory), "vkAllocateMemory (image)");
-  VkDeviceMemory mem = im.memory;
-  cleanup.push([dev, mem] { vkFreeMemory(dev, mem, nullptr); });
+  im.memory = allocateMemory(req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, "vkAllocateMemory (image)", cleanup);
   vkCheck(vkBindImageMemory(device_, im.image, im.memory, 0), "vkBindImageMemory");
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = im.image;

@@ -71,6 +71,10 @@ class VulkanContext {
 
  private:
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags props) const;
+  // Allocates memory meeting `req` with `props` and registers its release on `cleanup`; `what` names the
+  // resource in the error message.
+  VkDeviceMemory allocateMemory(const VkMemoryRequirements& req, VkMemoryPropertyFlags props,
+                                const char* what, CleanupStack& cleanup) const;
   void destroy();
 
   VkInstance instance_ = VK_NULL_HANDLE;
