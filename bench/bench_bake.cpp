@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "test_scenes.h"
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/bake/bench_rays.h"
 #include "tetraprobe/bake/tracer.h"
@@ -16,44 +17,10 @@
 namespace {
 
 using namespace tetraprobe;
-
-uint32_t addMaterial(Scene& s, glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f)) {
-  Material m;
-  m.name = "m";
-  m.name += std::to_string(s.materials.size());
-  m.albedo = albedo;
-  m.emission = emission;
-  s.materials.push_back(m);
-  return uint32_t(s.materials.size() - 1);
-}
-
-// Quad a-b-c-d (counter-clockwise seen from its front) split into n x n cells.
-void addQuad(Scene& s, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, uint32_t material, int n) {
-  auto at = [&](int i, int j) {
-    const float u = float(i) / n, v = float(j) / n;
-    return a * (1 - u) * (1 - v) + b * u * (1 - v) + c * u * v + d * (1 - u) * v;
-  };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const uint32_t base = uint32_t(s.positions.size());
-      s.positions.insert(s.positions.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
-      s.triangles.push_back({base, base + 1, base + 2});
-      s.triangles.push_back({base, base + 2, base + 3});
-      s.triangleMaterial.insert(s.triangleMaterial.end(), {material, material});
-    }
-}
-
-void addBox(Scene& s, glm::vec3 lo, glm::vec3 hi, bool inward, uint32_t material, int n) {
-  const glm::vec3 p[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
-                          {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
-  const int f[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
-  for (const auto& q : f) {
-    if (inward)
-      addQuad(s, p[q[3]], p[q[2]], p[q[1]], p[q[0]], material, n);
-    else
-      addQuad(s, p[q[0]], p[q[1]], p[q[2]], p[q[3]], material, n);
-  }
-}
+// The procedural scene is built with the bake tests' helpers (tests/bake/test_scenes.h).
+using test::addBox;
+using test::addMaterial;
+using test::addQuad;
 
 struct Fixture {
   Scene scene;
