@@ -101,6 +101,8 @@ const char* probeKindName(ProbeKind kind) {
       return "open";
     case ProbeKind::kFiller:
       return "filler";
+    case ProbeKind::kShell:
+      return "shell";
   }
   return "?";
 }

@@ -32,6 +32,8 @@ enum class ProbeKind : uint8_t {
   kVolume = 2,   // empty finest voxel inside a fine volume (Scene::fineVolumes), not next to geometry
   kOpen = 3,     // centre of an empty coarser octree cell (open space, graded up to maxSpacing)
   kFiller = 4,   // filler: open-space lattice at fillerSpacing, or added where tets were slivers
+  kShell = 5,    // shell: lattice on the level's bounds grown outward (placeShellProbes), so every surface
+                 // lies inside the tetrahedralization
 };
 const char* probeKindName(ProbeKind kind);
 
@@ -77,6 +79,20 @@ PlacedProbes placeVoxelProbes(const Scene& scene, const VoxelPlacementOptions& o
 // Triangle / axis-aligned box overlap (separating axis test). Closed box [lo, hi]. Exposed for tests.
 bool triangleBoxOverlap(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& lo,
                         const glm::dvec3& hi);
+
+// ---- Shell probes ------------------------------------------------------------------------------------
+
+// A lattice on the surface of the box [lo - margin, hi + margin] (margin = step / 2): every face split into
+// cells of at most `step` metres (at least one per axis), probes at the cell corners, each point once. With
+// them the probes' convex hull contains the whole box, so every surface of a level whose bounds are [lo, hi]
+// is inside a tet, where per-tet occlusion decides which probes it sees (a wall between a surface and a
+// shell probe outside a closed level is a splitting plane), instead of in the outer cells, which extrapolate
+// from the hull probes with no occlusion. Shell probes outside a closed level see only the backs of walls:
+// the pipeline bakes them and then replaces the SH of those that fail the inside rule by their nearest
+// valid probe's (dilateInvalidProbes in bake/dilate.h). Deterministic order (z, then y, then x). Throws
+// InputError for a non-finite box, hi < lo, a step <= 0 or non-finite, or more than `maxProbes` points.
+std::vector<glm::dvec3> placeShellProbes(const glm::dvec3& lo, const glm::dvec3& hi, double step,
+                                         size_t maxProbes = 5'000'000);
 
 // ---- Rejection / push-out ---------------------------------------------------------------------------
 
