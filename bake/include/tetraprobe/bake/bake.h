@@ -113,6 +113,20 @@ struct SurfacePoint {
 // At most 20 x count draws: may return fewer than `count` points when most surface is enclosed.
 std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int count, uint64_t seed);
 
+// ---- Dilation (bake/src/dilate.cpp) ----
+
+// Replaces the SH of every probe with invalid[i] != 0 by the SH of its nearest valid probe (Euclidean
+// distance in double; ties: the lower index), as Unity's Adaptive Probe Volumes dilate probes that see
+// mostly back faces. Used for shell probes outside a closed level (tetra/placement.h, placeShellProbes):
+// they are tet vertices the per-tet occlusion hides from the level's surfaces, and when it does not, they
+// repeat a nearby valid probe instead of the backs of walls. Exact nearest through a uniform grid searched
+// in growing rings; O(probes) expected. Returns the number replaced (0 when no probe is valid: nothing to
+// copy). Throws std::invalid_argument when the sizes differ.
+// `source` (optional) gets, per probe, the index of the probe whose SH it now holds (itself when valid or
+// when no probe is valid).
+size_t dilateInvalidProbes(const std::vector<glm::dvec3>& positions, const std::vector<uint8_t>& invalid,
+                           std::vector<ShRgb>& sh, std::vector<uint32_t>* source = nullptr);
+
 // ---- Deringing (bake/src/dering.cpp) ----
 //
 // An SH L2 probe reconstructs irradiance E(n) = sum A_l L_lm Y_lm(n) (runtime/sh.h). Bright, small sources
