@@ -122,8 +122,15 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
   std::vector<Sample> samples;
   const int nv = ctx.options.volumeSamples, ns = ctx.options.surfaceSamples;
   samples.reserve(size_t(nv) + 2 * size_t(ns));
+  // Where each probe's light is seen from: the probe itself, or for a dilated probe the probe whose SH it
+  // carries (OcclusionOptions::visibilitySource).
   glm::vec3 probeWorld[4];
-  for (int i = 0; i < 4; ++i) probeWorld[i] = toWorld(ctx.level, frame.p[i]);
+  glm::dvec3 probeLocal[4];
+  for (int i = 0; i < 4; ++i) {
+    const std::vector<uint32_t>& src = ctx.options.visibilitySource;
+    probeLocal[i] = src.empty() ? frame.p[i] : glm::dvec3(ctx.level.probes[src[size_t(tet.v[i])]]);
+    probeWorld[i] = toWorld(ctx.level, probeLocal[i]);
+  }
 
   auto answer = [&](Sample& s, const glm::dvec3& x, const glm::dvec3& n) {
     s.local = glm::vec3(x);
@@ -132,7 +139,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
     const double offset = std::max(double(ctx.tracer.rayEpsilon()), kRayOffset * frame.scale);
     const glm::vec3 origin = toWorld(ctx.level, x + n * offset);
     for (int i = 0; i < 4; ++i) {
-      if (glm::dot(frame.p[i] - x, n) < 0.0) continue;  // behind the surface the sample lies on
+      if (glm::dot(probeLocal[i] - x, n) < 0.0) continue;  // behind the surface the sample lies on
       const glm::vec3 d = probeWorld[i] - origin;
       const float dist = glm::length(d);
       bool blocked = false;
@@ -396,6 +403,14 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
   if (options.volumeSamples < 0 || options.surfaceSamples < 0)
     throw InputError("occlusion: negative sample count (volume " + std::to_string(options.volumeSamples) +
                      ", surface " + std::to_string(options.surfaceSamples) + ")");
+  if (!options.visibilitySource.empty()) {
+    if (options.visibilitySource.size() != level.probes.size())
+      throw InputError("occlusion: " + std::to_string(options.visibilitySource.size()) +
+                       " visibility sources for " + std::to_string(level.probes.size()) + " probes");
+    for (uint32_t v : options.visibilitySource)
+      if (v >= level.probes.size())
+        throw InputError("occlusion: visibility source " + std::to_string(v) + " is not a probe");
+  }
 
   OcclusionStats st;
   st.tets = level.tets.size();

@@ -150,6 +150,34 @@ TEST(Occlusion, SinglePlaneSplitsTheTet) {
   EXPECT_GE(volumeAgreement(tracer, level, occ, 400, 1), 0.98);
 }
 
+// A dilated probe (visibilitySource) is seen wherever the probe whose SH it carries is: with probes 2 and 3
+// (above the wall) carrying probe 0's and 1's SH, points below see all four; without sources, only 0 and 1.
+TEST(Occlusion, DilatedProbesAreSeenWhereTheirSourceIs) {
+  Scene s = test::emptyScene();
+  test::addAxisQuad(s, 2, 0.5f, {-1, -1}, {2, 2});
+  const SceneTracer tracer(s);
+  const Level level = test::makeLevel(test::regularTet());
+  OcclusionOptions o = quiet();
+  o.visibilitySource = {0, 1, 0, 1};
+  OcclusionStats st;
+  const LevelOcclusion occ = buildOcclusion(tracer, level, o, &st);
+  printStats("dilated sources", st);
+  // Below the wall every probe's source is visible: nothing to store. Above it, probes 0 and 1 (and so
+  // also 2 and 3) are hidden from the volume; the data must say so where it matters, below.
+  const glm::vec4 below =
+      occ.empty() ? glm::vec4(1.0f) : probeVisibility(level, occ, {0.5f, 0.5f, 0.3f}, glm::vec3(0.0f));
+  EXPECT_EQ(below, glm::vec4(1.0f));
+  const glm::vec4 onWall =
+      occ.empty() ? glm::vec4(1.0f) : probeVisibility(level, occ, {0.5f, 0.5f, 0.5f}, {0, 0, -1});
+  EXPECT_EQ(onWall, glm::vec4(1.0f));
+  const LevelOcclusion plain = buildOcclusion(tracer, level, quiet(), nullptr);
+  EXPECT_EQ(probeVisibility(level, plain, {0.5f, 0.5f, 0.3f}, glm::vec3(0.0f)), glm::vec4(1, 1, 0, 0));
+  o.visibilitySource = {0, 1, 2};
+  EXPECT_THROW(buildOcclusion(tracer, level, o, nullptr), InputError);
+  o.visibilitySource = {0, 1, 2, 4};
+  EXPECT_THROW(buildOcclusion(tracer, level, o, nullptr), InputError);
+}
+
 // The same wall far from the world origin: the build traces in world space, the data and the lookup live in
 // the level's local frame (world = origin + local), and the answers are the same.
 TEST(Occlusion, LocalFrameAwayFromTheOrigin) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/runtime/level.h"
@@ -30,8 +31,13 @@ struct OcclusionOptions {
       // fraction of the tet's sampled (point, probe) visibility questions like the rays
   int volumeSamples = 32;   // stratified points inside each tet with geometry (no normal, no bias)
   int surfaceSamples = 32;  // points on the geometry inside each tet, each tested from both sides
-  int threads = 0;          // 0 = all cores; never changes the result
-  bool progress = true;     // progress bar on a terminal
+  // Per level probe, the probe whose SH it carries (empty: each its own). A dilated probe (bake/bake.h,
+  // dilateInvalidProbes: a shell probe behind the level's walls with its nearest valid probe's SH) counts as
+  // visible from a point when that source probe is, so the lookup keeps interpolating towards it rather
+  // than dropping it at every surface it lies behind. Must hold level.probes.size() valid indices.
+  std::vector<uint32_t> visibilitySource;
+  int threads = 0;       // 0 = all cores; never changes the result
+  bool progress = true;  // progress bar on a terminal
 };
 
 struct OcclusionStats {
