@@ -1,5 +1,6 @@
 // `tetraprobe bake SCENE -o LEVEL.tpb`: the per-level build.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -31,6 +32,10 @@ int cmdBake(int argc, char** argv) {
         "voxel"},
        {"--max-spacing", "", "METRES", "voxel: coarsest open-space cell", "10"},
        {"--filler-spacing", "", "METRES", "voxel: open-space filler lattice (0 = none)", "4"},
+       {"--shell-spacing", "", "auto|METRES",
+        "voxel: shell probes on the level's bounds grown outward, so every surface lies inside a tet where "
+        "occlusion applies (docs/occlusion.md); auto = --spacing, 0 = none",
+        "auto"},
        {"--tetra", "", "cgal|tetgen",
         "tetrahedralizer: CGAL Delaunay + circumcentre fillers at slivers, or TetGen Delaunay + quality "
         "refinement whose Steiner points become fillers",
@@ -80,6 +85,10 @@ int cmdBake(int argc, char** argv) {
   if (!(opt.maxSpacing >= opt.spacing)) throw UsageError("--max-spacing must be at least --spacing");
   opt.fillerSpacing = args.number("--filler-spacing");
   if (!(opt.fillerSpacing >= 0.0)) throw UsageError("--filler-spacing must be >= 0");
+  const std::string shellSpacing = args.str("--shell-spacing");
+  opt.shellSpacing = shellSpacing == "auto" ? -1.0 : parseNumber(shellSpacing, "--shell-spacing");
+  if (!(opt.shellSpacing >= 0.0 || shellSpacing == "auto") || !std::isfinite(opt.shellSpacing))
+    throw UsageError("--shell-spacing must be auto or a finite number >= 0");
   opt.tetra = args.str("--tetra");
   if (opt.tetra != "cgal" && opt.tetra != "tetgen")
     throw UsageError("--tetra must be cgal or tetgen, not '" + opt.tetra + "'");
@@ -154,10 +163,10 @@ int cmdBake(int argc, char** argv) {
   else if (opt.placement == "voxel")
     std::printf(
         "  probes  %zu (voxel %.3g..%.3g m: %zu surface, %zu volume, %zu open, %zu filler (%zu at "
-        "slivers), %zu user; %zu rejected, %zu pushed, %zu merged)\n",
+        "slivers), %zu shell (%zu dilated), %zu user; %zu rejected, %zu pushed, %zu merged)\n",
         level.probes.size(), opt.spacing, opt.maxSpacing, stats.surfaceProbes, stats.volumeProbes,
-        stats.openProbes, stats.fillerProbes, stats.sliverFillers, stats.userProbes, stats.rejectedProbes,
-        stats.pushedProbes, stats.mergedProbes);
+        stats.openProbes, stats.fillerProbes, stats.sliverFillers, stats.shellProbes, stats.dilatedProbes,
+        stats.userProbes, stats.rejectedProbes, stats.pushedProbes, stats.mergedProbes);
   else
     std::printf("  probes  %zu (grid %.3g m: %zu placed, %zu inside geometry rejected)\n",
                 level.probes.size(), opt.spacing, stats.gridProbes, stats.rejectedProbes);
@@ -203,6 +212,7 @@ int cmdBake(int argc, char** argv) {
                                                             : opt.placement},
                     {"max_spacing", opt.maxSpacing},
                     {"filler_spacing", opt.fillerSpacing},
+                    {"shell_spacing", opt.shellSpacing < 0.0 ? opt.spacing : opt.shellSpacing},
                     {"tetra", opt.tetra},
                     {"sh_order", opt.bake.shOrder},
                     {"dering", dering},
@@ -217,6 +227,8 @@ int cmdBake(int argc, char** argv) {
                    {"open", stats.openProbes},
                    {"filler", stats.fillerProbes},
                    {"filler_at_slivers", stats.sliverFillers},
+                   {"shell", stats.shellProbes},
+                   {"dilated", stats.dilatedProbes},
                    {"pushed", stats.pushedProbes},
                    {"merged", stats.mergedProbes}};
     j["tets"] = {{"count", level.tets.size()},

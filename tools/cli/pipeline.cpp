@@ -95,7 +95,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   timer.mark("bvh");
 
   std::vector<glm::dvec3> probes;
-  std::optional<TetMesh> voxelMesh;  // voxel placement tetrahedralizes with its fillers
+  std::optional<TetMesh> voxelMesh;   // voxel placement tetrahedralizes with its fillers
+  std::vector<size_t> shell;          // indices of shell probes in `probes`
+  std::vector<uint32_t> dilatedFrom;  // per probe, the probe whose SH it holds (after dilation)
   ProbeShTable imported;
   if (!options.importShCsv.empty()) {
     if (!options.probesCsv.empty())
@@ -132,6 +134,20 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     if (placed.size() < 4)
       throw InputError("only " + std::to_string(placed.size()) +
                        " probe(s) left after voxel placement (need at least 4 that are not all coplanar)");
+    const double shellStep = options.shellSpacing < 0.0 ? options.spacing : options.shellSpacing;
+    if (shellStep > 0.0) {
+      // Around the scene and every probe, so the shell is at least half a step from all of them.
+      glm::vec3 slo, shi;
+      sceneBounds(scene, slo, shi);
+      glm::dvec3 lo(slo), hi(shi);
+      for (const glm::dvec3& p : placed.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+      for (const glm::dvec3& p : placeShellProbes(lo, hi, shellStep))
+        placed.add(p, ProbeKind::kShell, shellStep);
+      stats.shellProbes = placed.count(ProbeKind::kShell);
+    }
     FillerOptions fo;
     fo.backend = options.tetra == "tetgen" ? TetraBackend::kTetGen : TetraBackend::kCgal;
     const FillerResult filled = addSliverFillers(placed, fo, [&](const std::vector<glm::dvec3>& pts) {
@@ -150,6 +166,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     stats.openProbes = placed.count(ProbeKind::kOpen);
     stats.fillerProbes = placed.count(ProbeKind::kFiller);
     voxelMesh = filled.mesh;
+    for (size_t i = 0; i < placed.size(); ++i)
+      if (placed.kinds[i] == ProbeKind::kShell) shell.push_back(i);
     probes = std::move(placed.positions);
   } else if (options.placement != "grid") {
     throw InputError("unknown placement '" + options.placement + "' (voxel, grid or none)");
@@ -209,6 +227,18 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     level.sh = bakeProbes(tracer, probes, options.bake, &stats.bake);
     timer.mark("bake");
   }
+  if (!shell.empty() && options.importShCsv.empty()) {
+    // Shell probes outside a closed level see the backs of its walls: they take their nearest valid
+    // probe's SH (by the push-out's inside rule, so the same probes would have been rejected as inside).
+    std::vector<glm::dvec3> pts;
+    for (size_t i : shell) pts.push_back(probes[i]);
+    const std::vector<Clearance> c =
+        tracerClearance(tracer, options.bake.threads)(pts, std::vector<double>(pts.size(), options.spacing));
+    std::vector<uint8_t> invalid(probes.size(), 0);
+    for (size_t k = 0; k < shell.size(); ++k) invalid[shell[k]] = c[k].inside ? 1 : 0;
+    stats.dilatedProbes = dilateInvalidProbes(probes, invalid, level.sh, &dilatedFrom);
+    timer.mark("dilate");
+  }
   DeringOptions dering = options.dering;
   dering.threads = options.bake.threads;
   stats.dering = deringProbes(level.sh, dering);
@@ -218,6 +248,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     OcclusionOptions occ = options.occlusion;
     occ.threads = options.bake.threads;
     occ.progress = options.bake.progress;
+    occ.visibilitySource = dilatedFrom;
     level.occlusion = buildOcclusion(tracer, level, occ, &stats.occlusion);
     timer.mark("occlusion");
   }
@@ -227,7 +258,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       << (!options.importShCsv.empty()  ? "imported"
           : options.placement == "none" ? "user"
                                         : options.placement)
-      << "; tetra=" << options.tetra << "; spacing=" << options.spacing
+      << "; tetra=" << options.tetra << "; spacing=" << options.spacing << "; shell_spacing="
+      << (options.placement != "voxel" ? 0.0
+          : options.shellSpacing < 0.0 ? options.spacing
+                                       : options.shellSpacing)
       << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
       << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
       << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)

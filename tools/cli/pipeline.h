@@ -26,6 +26,9 @@ struct PipelineOptions {
   std::string placement = "voxel";
   double maxSpacing = 10.0;    // voxel: coarsest open-space cell, metres
   double fillerSpacing = 4.0;  // voxel: open-space filler lattice, metres (0 = none)
+  // voxel: shell probes (tetra/placement.h, placeShellProbes) on the level's bounds grown outward, at this
+  // step in metres; < 0 = the spacing, 0 = none. Shell probes that fail the inside rule are dilated.
+  double shellSpacing = -1.0;
   std::string tetra = "cgal";  // "cgal" | "tetgen"
 
   // Per-tet occlusion against light leaking, built after the SH bake and stored in the level
@@ -45,6 +48,8 @@ struct PipelineStats {
   // Placement by kind (voxel placement; counts after push-out and merge) and tet quality.
   size_t surfaceProbes = 0, volumeProbes = 0, openProbes = 0, fillerProbes = 0;  // filler: lattice + sliver
   size_t sliverFillers = 0;  // of fillerProbes, added where tets were slivers
+  size_t shellProbes = 0;    // on the level's grown bounds (placeShellProbes)
+  size_t dilatedProbes = 0;  // shell probes outside a closed level: SH copied from the nearest valid probe
   size_t pushedProbes = 0;   // moved out of geometry or off a surface
   size_t mergedProbes = 0;   // dropped as near-coincident (tolerance 0.1 x local spacing)
   double minDihedralBeforeFiller = 0.0, minDihedral = 0.0;  // worst tet, degrees
