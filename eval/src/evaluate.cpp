@@ -49,9 +49,19 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
     report.points[i].reference =
         referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
                             mix(options.seed ^ mix(i)), bake);
+    // The direct part (0 bounces: only NEE and emitters hit at once; cheap, so a quarter of the samples).
+    BakeOptions direct = bake;
+    direct.bounces = 0;
+    report.points[i].direct = referenceIrradiance(tracer, surface[i].position, surface[i].normal,
+                                                  std::max(1, options.samplesPerPoint / 4),
+                                                  mix(options.seed ^ mix(i) ^ 0xd1ec7ull), direct)
+                                  .irradiance;
+    report.points[i].indirectOnly = luminance(report.points[i].direct) <
+                                    kIndirectOnlyFraction * luminance(report.points[i].reference.irradiance);
     if (options.progress) progress.advance();
   });
   progress.finish();
+  for (const auto& p : report.points) report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
   double sum = 0.0;
   for (const auto& p : report.points)
     sum += luminance(p.reference.stderror) /
@@ -71,7 +81,8 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
     m.values[i] = method.lookup(report.points[i].surface.position, report.points[i].surface.normal);
 
   std::vector<double> rel(n);
-  double se = 0.0, leak = 0.0;
+  double se = 0.0, leak = 0.0, leakIndirect = 0.0;
+  size_t indirect = 0;
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 x = m.values[i], r = report.points[i].reference.irradiance;
     double e = 0.0;
@@ -81,8 +92,14 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
       e += std::abs(d) / std::sqrt(double(r[c]) * r[c] + kFloor);
     }
     rel[i] = e / 3.0;
-    leak += std::max(0.0, luminance(x) - luminance(r)) / std::max(luminance(r), kFloor);
+    const double l = std::max(0.0, luminance(x) - luminance(r)) / std::max(luminance(r), kFloor);
+    leak += l;
+    if (report.points[i].indirectOnly) {
+      leakIndirect += l;
+      ++indirect;
+    }
   }
+  if (indirect > 0) m.leakIndirect = leakIndirect / double(indirect);
   if (n > 0) {
     m.relmse = se / double(3 * n);
     double sum = 0.0;

@@ -80,11 +80,14 @@ int cmdEval(int argc, char** argv) {
     std::printf("  occlusion (stored in the level): %zu none, %zu planes, %zu shadow maps; %zu bytes\n",
                 counts[0], counts[1], counts[2], level.occlusion.bytes());
   }
-  std::printf("  %-18s %10s %14s %13s %10s %12s %12s\n", "method", "relmse", "mean_rel_err", "p95_rel_err",
-              "leak", "ns/query", "bytes");
+  std::printf("  %zu of %zu points lit only indirectly (leak_ind is the leak over them)\n",
+              report.indirectOnlyPoints, report.points.size());
+  std::printf("  %-18s %10s %14s %13s %10s %10s %12s %12s\n", "method", "relmse", "mean_rel_err",
+              "p95_rel_err", "leak", "leak_ind", "ns/query", "bytes");
   for (const auto& m : report.methods)
-    std::printf("  %-18s %10.4f %14.4f %13.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
-                m.meanRelError, m.p95RelError, m.leak, m.cpuNsPerQuery, (unsigned long long)m.bytes);
+    std::printf("  %-18s %10.4f %14.4f %13.4f %10.4f %10.4f %12.1f %12llu\n", m.name.c_str(), m.relmse,
+                m.meanRelError, m.p95RelError, m.leak, m.leakIndirect, m.cpuNsPerQuery,
+                (unsigned long long)m.bytes);
 
   if (args.has("--points-out")) {
     std::string csv = "x,y,z,nx,ny,nz,ref_r,ref_g,ref_b,stderr_r,stderr_g,stderr_b";
@@ -116,6 +119,7 @@ int cmdEval(int argc, char** argv) {
                          {"mean_rel_error", m.meanRelError},
                          {"p95_rel_error", m.p95RelError},
                          {"leak", m.leak},
+                         {"leak_indirect", m.leakIndirect},
                          {"cpu_ns_per_query", m.cpuNsPerQuery},
                          {"bytes", m.bytes}});
     nlohmann::json j = {{"scene", args.positional()[0]},
@@ -125,6 +129,7 @@ int cmdEval(int argc, char** argv) {
                           {"samples_per_point", report.samplesPerPoint},
                           {"bounces", report.referenceBounces},
                           {"mean_rel_stderr", report.meanRelStderr},
+                          {"indirect_only_points", report.indirectOnlyPoints},
                           {"seconds", report.referenceSeconds}}},
                         {"methods", methods}};
     if (stored)

@@ -7,6 +7,8 @@
 //   mean_rel_error = mean over p of rel error(p);  p95_rel_error = its 95th percentile
 //   leak           = mean over p of max(0, lum(x) - lum(r)) / max(lum(r), 0.01)   (light that should not be
 //   there)
+//   leak_indirect  = the same mean over the points lit only indirectly (direct light below 1 % of r: the
+//   surfaces that see the light only through a door, where a leak shows)
 // The 0.01 W/m^2 floor keeps near-black points from dominating; it is ~1e-4 of a lit room's irradiance.
 #pragma once
 
@@ -24,6 +26,9 @@
 
 namespace tetraprobe {
 
+// A point is "lit only indirectly" when less than this fraction of its reference comes directly.
+inline constexpr double kIndirectOnlyFraction = 0.01;
+
 struct EvalOptions {
   int points = 512;            // surface points
   int samplesPerPoint = 4096;  // reference paths per point
@@ -39,6 +44,7 @@ struct MethodResult {
   double meanRelError = 0.0;
   double p95RelError = 0.0;
   double leak = 0.0;
+  double leakIndirect = 0.0;      // leak over the points lit only indirectly (EvalPoint::indirectOnly)
   double cpuNsPerQuery = 0.0;     // single thread, median of repeated timed passes over all points
   uint64_t bytes = 0;             // data the method needs at run time
   std::vector<glm::vec3> values;  // per-point lookups (same order as EvalReport::points)
@@ -47,12 +53,16 @@ struct MethodResult {
 struct EvalPoint {
   SurfacePoint surface;
   ReferenceIrradiance reference;
+  glm::vec3 direct{0.0f};     // direct part of the reference (0 bounces: emitters and sky seen directly)
+  bool indirectOnly = false;  // luminance(direct) < kIndirectOnlyFraction x luminance(reference)
 };
 
 struct EvalReport {
   int samplesPerPoint = 0;
   int referenceBounces = 0;
-  double meanRelStderr = 0.0;  // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
+  double meanRelStderr = 0.0;
+  size_t indirectOnlyPoints =
+      0;  // points lit only indirectly (EvalPoint::indirectOnly)  // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
   double referenceSeconds = 0.0;
   std::vector<EvalPoint> points;
   std::vector<MethodResult> methods;
