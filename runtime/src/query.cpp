@@ -3,9 +3,14 @@
 // coarse uniform grid of start tets (a lighter cousin of Valient 2014's per-cell lookup).
 //
 // Numerics: the stored rows are float (the GPU's layout); the CPU evaluates them in double on the
-// double-precision local point, so its only float error is the rows' own rounding. A walk is bounded
-// (kMaxWalkSteps) and checked for cycles (Brent); a cycle is answered by the best tet on it (see walk()),
-// and anything else ends in a brute-force scan, so every query terminates with a defined answer.
+// double-precision local point, so its only float error is the rows' own rounding: up to ~1e-4 in a weight
+// on slivers. Where that could decide the answer (the smallest weight within the rows' error bound of 0, or
+// below kBoundaryBand), the walk switches to weights computed in double from the four probe positions (signed
+// volumes, exactWeights()) for its remaining steps, so a point on or near a face, edge or vertex gets a tet
+// whose weights are exact to ~1e-12 and within [-1e-6, 1 + 1e-6] before clamping, on slivers too. Away from
+// faces the float rows decide alone (the common, cheap path). A walk is bounded (kMaxWalkSteps) and checked
+// for cycles (Brent); a cycle is answered by the best tet on it (see walk()), and anything else ends in a
+// brute-force scan, so every query terminates with a defined answer.
 //
 // Outside the hull (a walk leaving through a hull face whose plane the point is beyond, decided from the
 // probe positions in double, not the rows) the walk continues across the outer cells (outer_cells.h) to the
@@ -40,6 +45,9 @@ constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
 constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
+// A smallest float-row weight within this of 0 (or within the rows' rounding bound, rowErrorBound) switches
+// the walk to exact weights. 1e-4 covers the rows' rounding on ordinary tets with a wide margin.
+constexpr double kBoundaryBand = 1e-4;
 
 // Raw barycentric weights of local point x in tet t (may be negative outside), evaluated in double.
 inline void tetWeights(const Tet& t, const glm::dvec3& x, double w[4]) {
@@ -47,6 +55,50 @@ inline void tetWeights(const Tet& t, const glm::dvec3& x, double w[4]) {
     w[i] = double(t.row[i][0]) * x.x + double(t.row[i][1]) * x.y + double(t.row[i][2]) * x.z +
            double(t.row[i][3]);
   w[3] = 1.0 - w[0] - w[1] - w[2];
+}
+
+// Bound on the error of tetWeights() from the rows' float rounding at x: each row entry carries a relative
+// error of at most 2^-24, so w_i errs by at most 2^-24 (sum_j |row_ij x_j| + |row_i3|), and w_3 by the sum of
+// the three. Twice that sum, for margin.
+inline double rowErrorBound(const Tet& t, const glm::dvec3& x) {
+  double e = 0.0;
+  for (int i = 0; i < 3; ++i)
+    e += std::abs(double(t.row[i][0]) * x.x) + std::abs(double(t.row[i][1]) * x.y) +
+         std::abs(double(t.row[i][2]) * x.z) + std::abs(double(t.row[i][3]));
+  return 2.0 * 0x1p-24 * e;
+}
+
+// Barycentric weights of local point x in tet t computed in double from the probe positions: w_i is the
+// signed volume of the tet with vertex i moved to x, over the sum of the four (the tet's volume). With the
+// vertices taken relative to x each volume is a triple product of short vectors, accurate to ~1e-16 of the
+// tet's edge length cubed, so a weight is exact to ~1e-12 even on slivers and far from the origin.
+inline void exactWeights(const Tet& t, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
+                         double w[4]) {
+  glm::dvec3 p[4];
+  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(probes[size_t(t.v[i])]) - x;
+  // det[q0 - q3 | q1 - q3 | q2 - q3] with q_i = 0 (x), the others p: reduced by column operations.
+  const double v0 = -glm::dot(p[3], glm::cross(p[1], p[2]));
+  const double v1 = glm::dot(p[0], glm::cross(p[2], p[3]));
+  const double v2 = -glm::dot(p[0], glm::cross(p[1], p[3]));
+  const double v3 = glm::dot(p[0], glm::cross(p[1], p[2]));
+  const double sum = v0 + v1 + v2 + v3;
+  w[0] = v0 / sum;
+  w[1] = v1 / sum;
+  w[2] = v2 / sum;
+  w[3] = v3 / sum;
+}
+
+// True when the float rows put x inside tet t by more than their rounding could move (the smallest weight
+// w[m] at least kBoundaryBand and above rowErrorBound): the rows' weights are then the answer as they are.
+inline bool clearlyInside(const Tet& t, const glm::dvec3& x, double wMin) {
+  return wMin >= kBoundaryBand && wMin > rowErrorBound(t, x);
+}
+
+// True when the rows' smallest weight wMin at x is within their rounding (or kBoundaryBand) of 0 on either
+// side: the rows cannot tell which side of that face x is on, the probe positions decide.
+inline bool nearFace(const Tet& t, const glm::dvec3& x, double wMin) {
+  const double a = std::abs(wMin);
+  return a < kBoundaryBand || a <= rowErrorBound(t, x);
 }
 
 // Smallest weight and its index.
@@ -121,6 +173,9 @@ bool beyondHullFace(const Tet& t, const std::vector<glm::vec3>& probes, int f, c
 // along the walk that holds x best (largest smallest weight), if it holds it within kCycleAcceptEps;
 // otherwise (or after maxSteps) the walk returns false and the caller scans.
 // When the walk leaves through a hull face, `out` is the clamped hull tet and *exitFace the face's index.
+// Near a face (|smallest weight| < kBoundaryBand, or within the rows' rounding) the walk continues with
+// exact weights (exactWeights) from that tet on: every later step and the answer's weights come from the
+// probe positions, so the tet named holds x to ~1e-12 and the weights are accurate on slivers too.
 bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
           int32_t cur, int maxSteps, Location& out, int32_t* exitFace) {
   *exitFace = -1;
@@ -128,23 +183,45 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
   int power = 1, lam = 0;
   int32_t best = -1;
   double bestMin = -std::numeric_limits<double>::infinity(), bestW[4] = {};
+  bool exact = false;
+  const auto weights = [&](int32_t t, double w[4]) {
+    if (exact)
+      exactWeights(tets[size_t(t)], probes, x, w);
+    else
+      tetWeights(tets[size_t(t)], x, w);
+  };
+  // The answer's weights depend on the tet alone, not on the path: the rows' where they hold x clearly
+  // (as a walk that never came near a face takes them), else the exact ones.
+  const auto accept = [&](int32_t t, const double w[4]) {
+    if (exact) {
+      double wf[4];
+      tetWeights(tets[size_t(t)], x, wf);
+      if (clearlyInside(tets[size_t(t)], x, wf[minIndex(wf)])) return finish(t, wf, true);
+    }
+    return finish(t, w, true);
+  };
   for (int step = 0; step < maxSteps; ++step) {
     double w[4];
-    tetWeights(tets[size_t(cur)], x, w);
+    weights(cur, w);
     int m = minIndex(w);
+    if (!exact && nearFace(tets[size_t(cur)], x, w[m])) {
+      exact = true;  // near a face of this tet: the rows' rounding could decide, the positions decide instead
+      weights(cur, w);
+      m = minIndex(w);
+    }
     int32_t next = tets[size_t(cur)].n[m];
     if (w[m] >= -kInsideEps || std::isnan(w[m])) {
       // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
       // whichever tet holds it better, so the answer does not depend on the side the walk came from.
       if (w[m] < 0.0 && next >= 0) {
         double wn[4];
-        tetWeights(tets[size_t(next)], x, wn);
+        weights(next, wn);
         if (wn[minIndex(wn)] > w[m]) {
-          out = finish(next, wn, true);
+          out = accept(next, wn);
           return true;
         }
       }
-      out = finish(cur, w, true);
+      out = accept(cur, w);
       return true;
     }
     if (next < 0) {
@@ -161,7 +238,7 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
       for (int i = 0; i < 4; ++i)
         if (tets[size_t(cur)].n[i] >= 0 && (mi < 0 || w[i] < w[mi])) mi = i;
       if (mi < 0 || w[mi] >= -kInsideEps) {
-        out = finish(cur, w, true);
+        out = accept(cur, w);
         return true;
       }
       next = tets[size_t(cur)].n[mi];
@@ -201,7 +278,30 @@ Location scanAll(const Level& level, const glm::dvec3& x) {
       std::copy(w, w + 4, bestW);
     }
   }
-  return finish(best, bestW, bestMin >= -kInsideEps);
+  if (best < 0 || !nearFace(level.tets[size_t(best)], x, bestMin))
+    return finish(best, bestW, bestMin >= -kInsideEps);
+  // Near a face of the best tet by the rows: the tet and its neighbours decided by exact weights, as the
+  // walk decides there.
+  exactWeights(level.tets[size_t(best)], level.probes, x, bestW);
+  bestMin = bestW[minIndex(bestW)];
+  const Tet& t0 = level.tets[size_t(best)];
+  int32_t exactBest = best;
+  for (int f = 0; f < 4; ++f) {
+    const int32_t nb = t0.n[f];
+    if (nb < 0) continue;
+    double w[4];
+    exactWeights(level.tets[size_t(nb)], level.probes, x, w);
+    const double m = w[minIndex(w)];
+    if (m > bestMin || (m == bestMin && nb < exactBest)) {
+      exactBest = nb;
+      bestMin = m;
+      std::copy(w, w + 4, bestW);
+    }
+  }
+  double wf[4];
+  tetWeights(level.tets[size_t(exactBest)], x, wf);
+  if (clearlyInside(level.tets[size_t(exactBest)], x, wf[minIndex(wf)])) return finish(exactBest, wf, true);
+  return finish(exactBest, bestW, bestMin >= -kInsideEps);
 }
 
 // The answer of outer cell k: its triangle weights (tiny negatives clamped, renormalized) on the hull tet.

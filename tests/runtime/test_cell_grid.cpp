@@ -48,8 +48,8 @@ Level latticeLevel() {  // a regular lattice: cospherical everywhere, queries on
 }
 
 // The exact reference: every tet whose bounding box holds x (from a uniform bucket grid built here, not the
-// code under test) weighed in double from its rows, the best (largest smallest weight, ties lowest index)
-// taken; when none holds x within 1e-6, ProbeQuery::bruteForceLocate (every tet, then every outer cell).
+// code under test) weighed in double from its probe positions (test::exactTetWeights; the float rows only
+// skip tets far from x), the best (largest smallest weight, ties lowest index) taken; when none holds x within 1e-6, ProbeQuery::bruteForceLocate (every tet, then every outer cell).
 class ExactScan {
  public:
   ExactScan(const Level& level, const ProbeQuery& query) : level_(level), query_(query) {
@@ -88,6 +88,8 @@ class ExactScan {
           w[i] = double(tet.row[i][0]) * x.x + double(tet.row[i][1]) * x.y + double(tet.row[i][2]) * x.z +
                  double(tet.row[i][3]);
         w[3] = 1.0 - w[0] - w[1] - w[2];
+        if (*std::min_element(w, w + 4) < -1e-3) continue;  // far outside this tet, whatever the rounding
+        test::exactTetWeights(level_, tet, x, w);
         const double m = *std::min_element(w, w + 4);
         if (m > bestMin || (m == bestMin && t < best)) {
           best = t;
@@ -124,7 +126,9 @@ class ExactScan {
   mutable size_t outsideCount_ = 0;
 };
 
-// How far two correct answers may differ: 1e-6 when both are inside tets (float weights), unless the point
+// How far two correct answers may differ: 1e-6 when both are inside tets (float weights; plus the float rows'
+// rounding when both name the same tet, as locate() takes the rows' weights where they clearly hold x, and
+// the reference's are exact), unless the point
 // lies on a face, edge or vertex two tets share: each tet's float rows then put it there only within their
 // rounding, and which of them the walk stops in depends on where it came from; 1e-5 when both are
 // outer cells (a cell accepts a point within 1e-6 of its edges, where its neighbour's weights differ by that
@@ -135,7 +139,9 @@ double tolerance(const Level& level, const Location& a, const Location& b, const
   const auto minWeight = [](const Location& l) {
     return std::min({l.weights[0], l.weights[1], l.weights[2], l.weights[3]});
   };
-  if (a.inside && b.inside && (a.tet == b.tet || (minWeight(a) > 1e-5f && minWeight(b) > 1e-5f))) return 1e-6;
+  if (a.inside && b.inside && a.tet == b.tet)
+    return 1e-6 + 2.0 * test::rowRoundingBound(level.tets[size_t(a.tet)], world - level.origin);
+  if (a.inside && b.inside && minWeight(a) > 1e-5f && minWeight(b) > 1e-5f) return 1e-6;
   double slope = 0.0;
   for (const Location* loc : {&a, &b}) {
     if (loc->outerCell >= 0) continue;

@@ -7,8 +7,10 @@
 #include <random>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
+
 #include "tetraprobe/tetra/tetrahedralize.h"
 
 namespace tetraprobe::test {
@@ -45,6 +47,30 @@ inline Level makeLevel(const std::vector<glm::dvec3>& points, const glm::dvec3& 
   }
   level.tets = buildTetRecords(points, tetrahedralizeDelaunay(points), origin);
   return level;
+}
+
+// Barycentric weights of local point x in tet t, in double from the probe positions (signed volumes of the tet
+// with each vertex moved to x, over their sum): the exact reference the float rows approximate.
+inline void exactTetWeights(const Level& level, const Tet& t, const glm::dvec3& x, double w[4]) {
+  glm::dvec3 p[4];
+  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(t.v[i])]);
+  const auto vol = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& d) {
+    return glm::dot(a - d, glm::cross(b - d, c - d));
+  };
+  const double v[4] = {vol(x, p[1], p[2], p[3]), vol(p[0], x, p[2], p[3]), vol(p[0], p[1], x, p[3]),
+                       vol(p[0], p[1], p[2], x)};
+  const double sum = v[0] + v[1] + v[2] + v[3];
+  for (int i = 0; i < 4; ++i) w[i] = v[i] / sum;
+}
+
+// How far the float rows' weights of tet t at local x may be from the exact ones: 2^-24 relative per row
+// entry, summed over the terms (w_3 = 1 - the others carries their sum).
+inline double rowRoundingBound(const Tet& t, const glm::dvec3& x) {
+  double e = 0.0;
+  for (int i = 0; i < 3; ++i)
+    e += std::abs(double(t.row[i][0]) * x.x) + std::abs(double(t.row[i][1]) * x.y) +
+         std::abs(double(t.row[i][2]) * x.z) + std::abs(double(t.row[i][3]));
+  return 0x1p-24 * e;
 }
 
 // The interpolation a location stands for: probe -> weight (independent of which of two tets sharing a face

@@ -48,6 +48,11 @@ class ProbeQuery {
   // the one whose extruded triangle holds the point: a continuous answer that does not depend on the hint or
   // the walk's path (up to 1e-6 in the weights where two cells share the point).
   //
+  // Inside the hull the weights come from the tet's float rows where they hold the point by more than their
+  // rounding; on or near a face, edge or vertex (within 1e-4, or within the rows' rounding, which reaches
+  // ~1e-4 on slivers) the walk decides with weights computed in double from the four probe positions, so the
+  // tet named holds the point with exact weights within [-1e-6, 1 + 1e-6] and those are the weights returned.
+  //
   // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet comes from the
   // sparse cell grid's BSP (cell_grid.h): the middle tet of the point's leaf, a step or two from the answer;
   // a point whose cell is absent starts from the coarse start grid and ends in the outer cells.

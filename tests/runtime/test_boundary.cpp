@@ -1,0 +1,130 @@
+// Points on tet faces, edges and vertices (or within rounding of them) of sliver-rich levels, near the origin
+// and 10 km from it: ProbeQuery::locate must name a tet that holds the point with exact weights within
+// [-1e-6, 1 + 1e-6], report those weights to 1e-6, and give the interpolation of a tet that an exact-predicate
+// brute force (CGAL::orientation over every tet) finds holding the point.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <random>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "test_levels.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+// A jittered lattice: nearly cospherical everywhere, so the Delaunay tetrahedralization is full of slivers.
+std::vector<glm::dvec3> sliverPoints(const glm::dvec3& at, double jitter, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  std::vector<glm::dvec3> pts;
+  for (int z = 0; z < 6; ++z)
+    for (int y = 0; y < 5; ++y)
+      for (int x = 0; x < 7; ++x) pts.push_back(at + glm::dvec3(x + u(rng), y + u(rng), z + u(rng)) * 1.5);
+  return pts;
+}
+
+// Tets that hold local point x by exact predicates (every face's orientation with x agrees with the tet's,
+// or is zero).
+std::vector<int32_t> exactContainers(const Level& level, const glm::dvec3& x) {
+  std::vector<int32_t> out;
+  const K::Point_3 q(x.x, x.y, x.z);
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    K::Point_3 p[4];
+    for (int i = 0; i < 4; ++i) {
+      const glm::vec3& v = level.probes[size_t(level.tets[t].v[i])];
+      p[i] = K::Point_3(v.x, v.y, v.z);
+    }
+    const CGAL::Orientation o = CGAL::orientation(p[0], p[1], p[2], p[3]);
+    bool inside = o != CGAL::COPLANAR;
+    for (int i = 0; i < 4 && inside; ++i) {
+      K::Point_3 r[4] = {p[0], p[1], p[2], p[3]};
+      r[i] = q;
+      const CGAL::Orientation s = CGAL::orientation(r[0], r[1], r[2], r[3]);
+      inside = s == o || s == CGAL::COPLANAR;
+    }
+    if (inside) out.push_back(int32_t(t));
+  }
+  return out;
+}
+
+std::map<int32_t, double> exactProbeWeights(const Level& level, int32_t tet, const glm::dvec3& x) {
+  double w[4];
+  test::exactTetWeights(level, level.tets[size_t(tet)], x, w);
+  std::map<int32_t, double> m;
+  for (int i = 0; i < 4; ++i)
+    if (w[i] != 0.0) m[level.tets[size_t(tet)].v[i]] += w[i];
+  return m;
+}
+
+// Vertices, edge points and face points of every tet (random and exactly midway), through locate() with no
+// hint and with a hint: the named tet's exact weights lie in [-1e-6, 1 + 1e-6], the reported weights match
+// them to 1e-6, and the interpolation is that of a tet the exact predicates find holding the point.
+void checkBoundaryPoints(const Level& level, const char* what) {
+  const ProbeQuery q(level, 4.0f, 1);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_int_distribution<int32_t> anyTet(0, int32_t(level.tets.size()) - 1);
+  size_t checked = 0, slivers = 0;
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
+    const double volume = std::abs(glm::dot(p[0] - p[3], glm::cross(p[1] - p[3], p[2] - p[3]))) / 6.0;
+    slivers += volume < 0.01 * 1.5 * 1.5 * 1.5;
+    const double a = u(rng), b = u(rng) * (1.0 - a);
+    const glm::dvec3 points[] = {p[t % 4], 0.5 * (p[0] + p[1]), a * p[2] + (1.0 - a) * p[3],
+                                 a * p[0] + b * p[1] + (1.0 - a - b) * p[2], (p[1] + p[2] + p[3]) / 3.0};
+    for (const glm::dvec3& x : points) {
+      const glm::dvec3 world = level.origin + x;
+      const std::vector<int32_t> holders = exactContainers(level, world - level.origin);
+      if (holders.empty()) continue;  // rounded just outside the hull: the outer cells' business
+      for (int32_t hint : {int32_t(-1), anyTet(rng)}) {
+        const Location loc = q.locate(world, hint);
+        ASSERT_GE(loc.tet, 0);
+        ASSERT_TRUE(loc.inside) << what << " tet " << t;
+        double w[4];
+        test::exactTetWeights(level, level.tets[size_t(loc.tet)], world - level.origin, w);
+        for (int i = 0; i < 4; ++i) {
+          ASSERT_GE(w[i], -1e-6) << what << ": tet " << t << " point (" << x.x << ", " << x.y << ", " << x.z
+                                 << ") named tet " << loc.tet << ", hint " << hint;
+          ASSERT_LE(w[i], 1.0 + 1e-6) << what << ": tet " << t;
+          ASSERT_NEAR(loc.weights[i], w[i], 1e-6)
+              << what << ": tet " << t << " named tet " << loc.tet << " hint " << hint << " w " << w[0] << " "
+              << w[1] << " " << w[2] << " " << w[3] << " got " << loc.weights[0] << " " << loc.weights[1]
+              << " " << loc.weights[2] << " " << loc.weights[3];
+        }
+        const double d = test::maxDifference(test::probeWeights(level, loc),
+                                             exactProbeWeights(level, holders[0], world - level.origin));
+        ASSERT_LE(d, 1e-6) << what << ": tet " << t << " named tet " << loc.tet << ", exact holder "
+                           << holders[0] << " of " << holders.size();
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(slivers, 0u) << what << ": the level should hold slivers";
+  EXPECT_GT(checked, 4 * level.tets.size()) << what;
+}
+
+TEST(Locate, BoundaryPointsGetWeightsWithinToleranceOnSlivers) {
+  const glm::dvec3 at(-4.0, 1.0, 2.0);
+  checkBoundaryPoints(test::makeLevel(sliverPoints(at, 0.02, 5), at + glm::dvec3(4.0), 2), "slivers");
+}
+
+// 10 km from the world origin, with the local frame there (as bakes store it) and, harder, with the local
+// frame left at the world origin: float probe positions 10 km out, rows rounded at that scale.
+TEST(Locate, BoundaryPointsGetWeightsWithinToleranceTenKmOut) {
+  const glm::dvec3 at(10'000.0, 35.0, -10'000.0);
+  checkBoundaryPoints(test::makeLevel(sliverPoints(at, 0.02, 6), at + glm::dvec3(4.0), 3), "10 km, local");
+  checkBoundaryPoints(test::makeLevel(sliverPoints(at, 0.02, 7), glm::dvec3(0.0), 4), "10 km, world");
+}
+
+}  // namespace
+}  // namespace tetraprobe
