@@ -281,34 +281,10 @@ const int32_t* cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int32_t* 
   *count = 0;
   if (depth) *depth = 0;
   if (grid.slots.empty()) return nullptr;
-  int32_t key[3];
-  for (int a = 0; a < 3; ++a) {
-    const double f = std::floor((x[a] - double(grid.min[a])) / double(grid.cellSize));
-    if (!(f >= -2e9 && f <= 2e9)) return nullptr;  // also NaN
-    key[a] = int32_t(f);
-  }
-  const size_t mask = grid.slots.size() - 1;
-  size_t h = size_t(cellHash(key[0], key[1], key[2])) & mask;
-  int32_t node = 0;
-  bool found = false;
-  for (uint32_t probe = 0; probe < grid.maxProbe; ++probe, h = (h + 1) & mask) {
-    const CellSlot& s = grid.slots[h];
-    if (s.key[0] == INT32_MIN) break;
-    if (s.key[0] == key[0] && s.key[1] == key[1] && s.key[2] == key[2]) {
-      node = s.root;
-      found = true;
-      break;
-    }
-  }
-  if (!found) return nullptr;
+  int32_t key[3], node = 0;
+  if (!cellGridKey(grid, x, key) || !cellGridFind(grid, key, cellGridSlot(grid, key), &node)) return nullptr;
   int d = 0;
-  while (node >= 0) {
-    const BspNode& n = grid.nodes[size_t(node)];
-    const double s =
-        double(n.plane[0]) * x.x + double(n.plane[1]) * x.y + double(n.plane[2]) * x.z + double(n.plane[3]);
-    node = n.child[s >= 0.0 ? 1 : 0];
-    ++d;
-  }
+  for (; node >= 0; ++d) node = cellGridChild(grid.nodes[size_t(node)], x);
   if (depth) *depth = d;
   const int32_t* leaf = grid.leafTets.data() + size_t(-(node + 1));
   *count = leaf[0];

@@ -44,6 +44,11 @@ constexpr int kMaxGridDim = 1024;         // per axis
 constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
+// Plain walk steps (across a face the rows put x clearly beyond) taken from the cell grid's start tet before
+// the full walk (walk()); irradianceBatch takes them in lock step over a group of queries.
+constexpr int kPlainSteps = 8;
+constexpr int kHintPlainSteps = 3;    // irradianceBatch: steps from the previous query's tet
+constexpr size_t kBatchGroup = 16;    // irradianceBatch: queries interleaved stage by stage
 constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
 // A smallest float-row weight within this of 0 (or within the rows' rounding bound, rowErrorBound) switches
 // the walk to exact weights. 1e-4 covers the rows' rounding on ordinary tets with a wide margin.
@@ -263,6 +268,52 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
     }
   }
   return false;
+}
+
+// One plain walk step from tet `cur`: the neighbour across the face of the most negative weight when the rows
+// put x clearly beyond that face (below -kInsideEps and not within their rounding) and the neighbour exists;
+// else -1 (the full walk takes over). A walk's first steps are usually such steps: walk() from the tet they
+// reach takes the same path the walk from `cur` would (it is deterministic, and such steps are its own).
+inline int32_t plainStep(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, double w[4]) {
+  const Tet& t = tets[size_t(cur)];
+  tetWeights(t, x, w);
+  const int m = minIndex(w);
+  if (!(w[m] < -kInsideEps) || nearFace(t, x, w[m])) return -1;
+  return t.n[m];
+}
+
+// shIrradiance(shBlend(the tet's 4 probes, weights), normal), inlined: the same float operations in the same
+// order (so the same bits), over the 27 floats of each record as one flat loop the compiler vectorizes.
+inline glm::vec3 blendIrradiance(const std::vector<ShRgb>& sh, const Tet& t, const glm::vec4& weights,
+                                 const glm::vec3& normal) {
+  static_assert(sizeof(ShRgb) == 27 * sizeof(float));
+  const float* p[4];
+  for (int i = 0; i < 4; ++i) p[i] = reinterpret_cast<const float*>(&sh[size_t(t.v[i])]);
+  const float w0 = weights[0], w1 = weights[1], w2 = weights[2], w3 = weights[3];
+  float b[27];
+  for (int j = 0; j < 27; ++j) b[j] = ((p[0][j] * w0 + p[1][j] * w1) + p[2][j] * w2) + p[3][j] * w3;
+  const auto y = shBasis<float>(normal.x, normal.y, normal.z);
+  glm::vec3 e(0.0f);
+  for (int i = 0; i < kShCoeffCount; ++i) {
+    const float f = y[size_t(i)] * float(shCosineLobe(i));
+    e += glm::vec3(b[3 * i], b[3 * i + 1], b[3 * i + 2]) * f;
+  }
+  return e;
+}
+
+inline void prefetchTet(const std::vector<Tet>& tets, int32_t t) {
+  const char* p = reinterpret_cast<const char*>(tets.data() + t);
+  __builtin_prefetch(p);
+  __builtin_prefetch(p + sizeof(Tet) - 1);
+}
+
+inline void prefetchSh(const Level& level, const Tet& t) {
+  for (int i = 0; i < 4; ++i) {
+    const char* p = reinterpret_cast<const char*>(level.sh.data() + t.v[i]);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + sizeof(ShRgb) - 1);
+  }
 }
 
 Location scanAll(const Level& level, const glm::dvec3& x) {
@@ -504,12 +555,22 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   // the tree was split), stepping to the neighbour or out to the outer cells as needed.
   int32_t count = 0;
   const int32_t* leaf = cellGridLeaf(cellGrid(), x, &count);
-  // Leaves hold the tets overlapping a region about one tet across, in index (Morton) order: the middle one
-  // is near the region's centre, and the walk from it takes a step or two. Checking every leaf tet would
-  // cost more than those steps.
-  int32_t start = count > 0 ? leaf[count / 2] : -1;
-  if (start < 0) start = grid_.startTet[size_t(gridCell(grid_, x))];
-  return walkFrom(x, start, -1);
+  int32_t cur = startTet(x, leaf, count);
+  double w[4];
+  for (int s = 0; s < kPlainSteps; ++s) {
+    const int32_t next = plainStep(level_.tets, x, cur, w);
+    if (next < 0) break;
+    cur = next;
+  }
+  return walkFrom(x, cur, -1);
+}
+
+// Leaves hold the tets overlapping a region about one tet across, in index (Morton) order: the middle one is
+// near the region's centre, and the walk from it takes a step or two. Checking every leaf tet would cost more
+// than those steps. No leaf (or an empty one): the coarse start grid's tet.
+int32_t ProbeQuery::startTet(const glm::dvec3& x, const int32_t* leaf, int32_t count) const {
+  const int32_t start = count > 0 ? leaf[count / 2] : -1;
+  return start >= 0 ? start : grid_.startTet[size_t(gridCell(grid_, x))];
 }
 
 Location ProbeQuery::walkLocate(const glm::dvec3& world) const {
@@ -521,6 +582,10 @@ Location ProbeQuery::walkLocate(const glm::dvec3& world) const {
 glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache) const {
   const Location loc = locate(world, tetCache ? *tetCache : -1);
   if (tetCache) *tetCache = loc.tet;
+  return shade(loc, world, normal);
+}
+
+glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal) const {
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level_.tets[size_t(loc.tet)];
   glm::vec4 weights = loc.weights;
@@ -531,24 +596,144 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
     const glm::vec3 local(world - level_.origin);
     weights = applyOcclusion(weights, occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal));
   }
-  const ShRgb* probes[4];
-  float w[4];
-  for (int i = 0; i < 4; ++i) {
-    probes[i] = &level_.sh[size_t(t.v[i])];
-    w[i] = weights[i];
+  return blendIrradiance(level_.sh, t, weights, normal);
+}
+
+// Random queries on a large level are bound by memory latency: the hash slot, about a dozen BSP nodes, a tet
+// or three and four SH records, each a dependent cache miss. A group of kBatchGroup queries therefore goes
+// through locate()'s stages in lock step, each stage prefetching what the next needs for every query of the
+// group, so their misses overlap (group prefetching, Chen et al., "Improving hash join performance through
+// prefetching", ICDE 2004). Coherent queries (pixel order) first try the previous query's tet when they lie
+// within a quarter cell of the previous query: a few steps from it to a tet that holds the point clearly (by more than the rows' rounding)
+// give the answer the full locate() gives, as no other tet can hold such a point within tolerance.
+// Every stage computes what locate() computes, in the same order: out[i] is bit-identical to
+// irradiance(world[i], normal[i]).
+void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t begin,
+                            size_t end) const {
+  const std::vector<Tet>& tets = level_.tets;
+  const CellGrid& grid = cellGrid();
+  const bool hasGrid = !grid.slots.empty();
+  glm::dvec3 x[kBatchGroup];
+  int32_t key[kBatchGroup][3], code[kBatchGroup], cur[kBatchGroup];
+  size_t slot[kBatchGroup];
+  bool haveKey[kBatchGroup], done[kBatchGroup];
+  Location loc[kBatchGroup];
+  int32_t prevTet = -1;
+  glm::dvec3 prevX(std::numeric_limits<double>::infinity());
+  const double hintGate = 0.25 * double(grid.cellSize);
+  for (size_t g = begin; g < end; g += kBatchGroup) {
+    const size_t n = std::min(kBatchGroup, end - g);
+    // The local point and its cell; the previous query's tet for a point in the same cell.
+    for (size_t k = 0; k < n; ++k) {
+      x[k] = sanitize(world[g + k] - level_.origin, grid_);
+      done[k] = false;
+      const glm::dvec3 d = glm::abs(x[k] - prevX);
+      prevX = x[k];
+      if (prevTet >= 0 && std::max({d.x, d.y, d.z}) < hintGate) {
+        int32_t t = prevTet;
+        for (int s = 0; s <= kHintPlainSteps && t >= 0; ++s) {
+          double w[4];
+          tetWeights(tets[size_t(t)], x[k], w);
+          const int m = minIndex(w);
+          if (clearlyInside(tets[size_t(t)], x[k], w[m])) {
+            loc[k] = finish(t, w, true);
+            done[k] = true;
+            prevTet = t;
+            break;
+          }
+          t = w[m] < -kInsideEps && !nearFace(tets[size_t(t)], x[k], w[m]) ? tets[size_t(t)].n[m] : -1;
+        }
+      }
+      if (done[k]) {
+        prefetchSh(level_, tets[size_t(loc[k].tet)]);
+        continue;
+      }
+      haveKey[k] = hasGrid && cellGridKey(grid, x[k], key[k]);
+      if (haveKey[k]) {
+        slot[k] = cellGridSlot(grid, key[k]);
+        __builtin_prefetch(grid.slots.data() + slot[k]);
+      }
+    }
+    // The cell's tree, then its nodes down to the leaf, one level per round.
+    bool descending = false;
+    for (size_t k = 0; k < n; ++k) {
+      code[k] = 0;
+      if (done[k]) continue;
+      if (!haveKey[k] || !cellGridFind(grid, key[k], slot[k], &code[k])) {
+        haveKey[k] = false;  // no leaf: the start grid's tet
+        continue;
+      }
+      if (code[k] >= 0) {
+        __builtin_prefetch(grid.nodes.data() + code[k]);
+        descending = true;
+      } else {
+        __builtin_prefetch(grid.leafTets.data() - (code[k] + 1));
+      }
+    }
+    while (descending) {
+      descending = false;
+      for (size_t k = 0; k < n; ++k) {
+        if (done[k] || !haveKey[k] || code[k] < 0) continue;
+        code[k] = cellGridChild(grid.nodes[size_t(code[k])], x[k]);
+        if (code[k] >= 0) {
+          __builtin_prefetch(grid.nodes.data() + code[k]);
+          descending = true;
+        } else {
+          __builtin_prefetch(grid.leafTets.data() - (code[k] + 1));
+        }
+      }
+    }
+    // The leaf's start tet, then plain walk steps in lock step.
+    for (size_t k = 0; k < n; ++k) {
+      if (done[k]) continue;
+      const int32_t* leaf = nullptr;
+      int32_t count = 0;
+      if (haveKey[k]) {
+        leaf = grid.leafTets.data() + size_t(-(code[k] + 1));
+        count = leaf[0];
+        ++leaf;
+      }
+      cur[k] = startTet(x[k], leaf, count);
+      prefetchTet(tets, cur[k]);
+      code[k] = 0;  // now: plain steps still to take (0 = taking them)
+    }
+    for (int s = 0; s < kPlainSteps; ++s) {
+      bool moved = false;
+      for (size_t k = 0; k < n; ++k) {
+        if (done[k] || code[k] != 0) continue;
+        double w[4];
+        const int32_t next = plainStep(tets, x[k], cur[k], w);
+        if (next < 0) {
+          code[k] = 1;
+          continue;
+        }
+        cur[k] = next;
+        prefetchTet(tets, next);
+        moved = true;
+      }
+      if (!moved) break;
+    }
+    // The full walk from there (usually accepting at once), then the SH records.
+    for (size_t k = 0; k < n; ++k) {
+      if (done[k]) continue;
+      loc[k] = walkFrom(x[k], cur[k], -1);
+      if (loc[k].tet >= 0) prefetchSh(level_, tets[size_t(loc[k].tet)]);
+    }
+    for (size_t k = 0; k < n; ++k) out[g + k] = shade(loc[k], world[g + k], normal[g + k]);
+    if (loc[n - 1].inside) prevTet = loc[n - 1].tet;
   }
-  return shIrradiance(shBlend(probes, w, 4), normal);
 }
 
 void ProbeQuery::irradianceBatch(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out,
                                  size_t count, int threads) const {
   if (count == 0) return;
+  if (level_.tets.empty()) {
+    std::fill(out, out + count, glm::vec3(0.0f));
+    return;
+  }
   size_t n = threads > 0 ? size_t(threads) : size_t(std::max(1u, std::thread::hardware_concurrency()));
   n = std::clamp<size_t>((count + kMinBatchPerThread - 1) / kMinBatchPerThread, 1, n);
-  // No hint chaining between items: out[i] is exactly irradiance(world[i], normal[i]).
-  auto work = [=, this](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) out[i] = irradiance(world[i], normal[i]);
-  };
+  auto work = [=, this](size_t begin, size_t end) { batchRange(world, normal, out, begin, end); };
   std::vector<std::thread> pool;
   pool.reserve(n - 1);
   const size_t chunk = (count + n - 1) / n;

@@ -74,6 +74,7 @@ void checkBoundaryPoints(const Level& level, const char* what) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_int_distribution<int32_t> anyTet(0, int32_t(level.tets.size()) - 1);
   size_t checked = 0, slivers = 0;
+  std::vector<glm::dvec3> all;
   for (size_t t = 0; t < level.tets.size(); ++t) {
     glm::dvec3 p[4];
     for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
@@ -84,6 +85,7 @@ void checkBoundaryPoints(const Level& level, const char* what) {
                                  a * p[0] + b * p[1] + (1.0 - a - b) * p[2], (p[1] + p[2] + p[3]) / 3.0};
     for (const glm::dvec3& x : points) {
       const glm::dvec3 world = level.origin + x;
+      all.push_back(world);
       const std::vector<int32_t> holders = exactContainers(level, world - level.origin);
       if (holders.empty()) continue;  // rounded just outside the hull: the outer cells' business
       for (int32_t hint : {int32_t(-1), anyTet(rng)}) {
@@ -109,6 +111,11 @@ void checkBoundaryPoints(const Level& level, const char* what) {
       }
     }
   }
+  // The batch (interleaved, trying the previous point's tet) answers these exactly as single queries.
+  std::vector<glm::vec3> normal(all.size(), glm::normalize(glm::vec3(0.3f, 1.0f, -0.2f))), batch(all.size());
+  q.irradianceBatch(all.data(), normal.data(), batch.data(), all.size(), 2);
+  for (size_t i = 0; i < all.size(); ++i)
+    ASSERT_EQ(batch[i], q.irradiance(all[i], normal[i])) << what << " " << i;
   EXPECT_GT(slivers, 0u) << what << ": the level should hold slivers";
   EXPECT_GT(checked, 4 * level.tets.size()) << what;
 }

@@ -209,26 +209,45 @@ TEST(Query, ConstantShGivesConstantIrradiance) {
   }
 }
 
-// Threads must only split the work: the batch is bit-identical to the single queries.
+// The batch interleaves queries and tries the previous item's tet first; threads only split the work: it is
+// bit-identical to the single queries, on random points (inside and around the hull), points on tet
+// vertices, edges and faces, far outside, and in raster (pixel) order, where the previous tet is the hint.
 TEST(Query, BatchMatchesSingle) {
-  const Level& level = randomLevel();
-  const ProbeQuery q(level);
-  std::mt19937_64 rng(14);
-  std::uniform_real_distribution<double> box(-35.0, 35.0);
-  std::normal_distribution<float> n(0.0f, 1.0f);
-  const size_t count = 10'001;
-  std::vector<glm::dvec3> world(count);
-  std::vector<glm::vec3> normal(count), single(count);
-  for (size_t i = 0; i < count; ++i) {
-    world[i] = kOrigin + glm::dvec3(box(rng), box(rng), box(rng));
-    normal[i] = glm::normalize(glm::vec3(n(rng), n(rng), n(rng)));
-    single[i] = q.irradiance(world[i], normal[i]);
-  }
-  for (int threads : {0, 1, 3, 8}) {
-    std::vector<glm::vec3> batch(count, glm::vec3(-999.0f));
-    q.irradianceBatch(world.data(), normal.data(), batch.data(), count, threads);
-    for (size_t i = 0; i < count; ++i)
-      ASSERT_EQ(batch[i], single[i]) << "item " << i << ", " << threads << " threads";
+  for (const Level* level : {&randomLevel(), &gridLevel()}) {
+    const ProbeQuery q(*level);
+    std::mt19937_64 rng(14);
+    std::uniform_real_distribution<double> box(-35.0, 35.0), u(0.0, 1.0);
+    std::normal_distribution<float> n(0.0f, 1.0f);
+    std::vector<glm::dvec3> world;
+    for (int k = 0; k < 10'001; ++k) world.push_back(kOrigin + glm::dvec3(box(rng), box(rng), box(rng)));
+    for (size_t t = 0; t < level->tets.size(); ++t) {
+      glm::dvec3 p[4];
+      for (int i = 0; i < 4; ++i)
+        p[i] = level->origin + glm::dvec3(level->probes[size_t(level->tets[t].v[i])]);
+      const double a = u(rng), b = u(rng) * (1.0 - a);
+      world.push_back(p[t % 4]);
+      world.push_back(a * p[1] + (1.0 - a) * p[3]);
+      world.push_back(a * p[0] + b * p[1] + (1.0 - a - b) * p[2]);
+    }
+    for (int k = 0; k < 1000; ++k) world.push_back(kOrigin + 1e4 * glm::dvec3(box(rng), box(rng), box(rng)));
+    for (int r = 0; r < 120; ++r)  // a raster over a slanted plane through the level
+      for (int c = 0; c < 160; ++c) {
+        const double s = (c + 0.5) / 160.0, t = (r + 0.5) / 120.0;
+        world.push_back(kOrigin + kLo + (kHi - kLo) * glm::dvec3(s, 0.1 + 0.8 * t, 0.9 - 0.8 * t));
+      }
+    const size_t count = world.size();
+    std::vector<glm::vec3> normal(count), single(count);
+    for (size_t i = 0; i < count; ++i) {
+      normal[i] = glm::normalize(glm::vec3(n(rng), n(rng), n(rng)));
+      single[i] = q.irradiance(world[i], normal[i]);
+    }
+    for (int threads : {0, 1, 3, 8}) {
+      std::vector<glm::vec3> batch(count, glm::vec3(-999.0f));
+      q.irradianceBatch(world.data(), normal.data(), batch.data(), count, threads);
+      for (size_t i = 0; i < count; ++i)
+        ASSERT_EQ(batch[i], single[i]) << "item " << i << " at (" << world[i].x << ", " << world[i].y << ", "
+                                       << world[i].z << "), " << threads << " threads";
+    }
   }
 }
 

@@ -5,6 +5,9 @@
 // so the answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
 #pragma once
 
+#include <climits>
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -67,5 +70,45 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
 // its leaf is empty: x is then outside every tet overlapping the grid). `depth` (optional) gets the number
 // of nodes descended.
 const int32_t* cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int32_t* count, int* depth = nullptr);
+
+// The steps of cellGridLeaf one by one, for callers interleaving many queries (ProbeQuery::irradianceBatch
+// prefetches each step's memory for a group of queries before taking it). cellGridLeaf is exactly
+// cellGridKey, then cellGridFind from cellGridSlot, then cellGridChild until the code is a leaf (< 0).
+
+// x's cell coordinates; false when x is beyond any representable cell (or NaN): no cell, no leaf.
+inline bool cellGridKey(const CellGrid& grid, const glm::dvec3& x, int32_t key[3]) {
+  for (int a = 0; a < 3; ++a) {
+    const double f = std::floor((x[a] - double(grid.min[a])) / double(grid.cellSize));
+    if (!(f >= -2e9 && f <= 2e9)) return false;  // also NaN
+    key[a] = int32_t(f);
+  }
+  return true;
+}
+
+// The slot where the search for `key` starts (the table must not be empty).
+inline size_t cellGridSlot(const CellGrid& grid, const int32_t key[3]) {
+  return size_t(cellHash(key[0], key[1], key[2])) & (grid.slots.size() - 1);
+}
+
+// The cell's tree (a node index >= 0 or a leaf code < 0), searching from slot h; false when absent.
+inline bool cellGridFind(const CellGrid& grid, const int32_t key[3], size_t h, int32_t* root) {
+  const size_t mask = grid.slots.size() - 1;
+  for (uint32_t probe = 0; probe < grid.maxProbe; ++probe, h = (h + 1) & mask) {
+    const CellSlot& s = grid.slots[h];
+    if (s.key[0] == INT32_MIN) return false;
+    if (s.key[0] == key[0] && s.key[1] == key[1] && s.key[2] == key[2]) {
+      *root = s.root;
+      return true;
+    }
+  }
+  return false;
+}
+
+// The child of node `n` on x's side of its plane (evaluated in double).
+inline int32_t cellGridChild(const BspNode& n, const glm::dvec3& x) {
+  const double s =
+      double(n.plane[0]) * x.x + double(n.plane[1]) * x.y + double(n.plane[2]) * x.z + double(n.plane[3]);
+  return n.child[s >= 0.0 ? 1 : 0];
+}
 
 }  // namespace tetraprobe
