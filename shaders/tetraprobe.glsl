@@ -532,7 +532,7 @@ void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
 
 // --- occlusion: mirrors runtime/src/occlusion.cpp (evaluateTetOcclusion, biasWeights, applyOcclusion) ---
 const float TETRAPROBE_OCC_BIAS = 0.03, TETRAPROBE_OCC_PLANE_HALF = 0.02, TETRAPROBE_OCC_SHADOW_HALF = 0.01,
-            TETRAPROBE_OCC_FALLBACK = 1e-3;
+            TETRAPROBE_OCC_FALLBACK = 1e-2;
 
 float tetraprobeOccSmooth(float e0, float e1, float x) {  // as the CPU's smoothStep, operation for operation
   precise float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);
@@ -657,8 +657,10 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
   return vis;
 }
 
-// applyOcclusion: weights * visibility renormalized; below the fallback sum blended into the plain weights.
-vec4 tetraprobeOccApply(vec4 weights, vec4 visibility) {
+// applyOcclusion: weights * visibility renormalized (the sanitized weights when nothing is visible);
+// `fallback` = the fallback's share, 1 - s / TETRAPROBE_OCC_FALLBACK below it, else 0.
+vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
+  fallback = 0.0;
   precise vec4 w, v;
   precise float sumW = 0.0;
   for (int i = 0; i < 4; ++i) {
@@ -670,25 +672,35 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility) {
   w = w / sumW;
   precise vec4 o = w * v;
   precise float s = o.x + o.y + o.z + o.w;
-  if (s >= TETRAPROBE_OCC_FALLBACK) return o / s;
-  precise float a = s / TETRAPROBE_OCC_FALLBACK;
-  precise vec4 visible = s > 0.0 ? o / s : vec4(0.0);
-  precise vec4 r = a * visible + (1.0 - a) * w;
-  return r;
+  if (s < TETRAPROBE_OCC_FALLBACK) fallback = 1.0 - s / TETRAPROBE_OCC_FALLBACK;
+  return s > 0.0 ? o / s : w;
 }
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
-// outer cell) outside it, as ProbeQuery::irradiance does.
+// outer cell) outside it; a point that sees none blends into its dimmest probe (per channel). Mirrors
+// ProbeQuery::irradiance and occludedIrradiance (runtime/occlusion.h).
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
   if (loc.tet < 0) return vec3(0.0);
   vec4 w = loc.weights;
+  float fallback = 0.0;
   if (tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
-    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal));
+    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal), fallback);
   vec3 c[9];
   tetraprobeBlendSh(loc.tet, w, c);
-  return tetraprobeShIrradiance(c, normal);
+  vec3 e = tetraprobeShIrradiance(c, normal);
+  if (fallback > 0.0) {
+    vec3 dimmest = vec3(3.0e38);
+    for (int i = 0; i < 4; ++i) {
+      vec4 one = vec4(0.0);
+      one[i] = 1.0;
+      tetraprobeBlendSh(loc.tet, one, c);
+      dimmest = min(dimmest, tetraprobeShIrradiance(c, normal));
+    }
+    e = (1.0 - fallback) * e + fallback * dimmest;
+  }
+  return e;
 }
 
 #endif  // TETRAPROBE_GLSL

@@ -166,12 +166,10 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
             const Tet& t = lv->tets[size_t(loc.tet)];
             const glm::vec3 local(p - lv->origin);
-            const glm::vec4 w =
-                applyOcclusion(loc.weights, occlusionVisibility(*lv, *occlusion, loc.tet, local, n));
             const ShRgb* probes[4] = {&lv->sh[size_t(t.v[0])], &lv->sh[size_t(t.v[1])],
                                       &lv->sh[size_t(t.v[2])], &lv->sh[size_t(t.v[3])]};
-            const float weights[4] = {w.x, w.y, w.z, w.w};
-            return shIrradiance(shBlend(probes, weights, 4), n);
+            return occludedIrradiance(probes, loc.weights,
+                                      occlusionVisibility(*lv, *occlusion, loc.tet, local, n), n);
           }};
 }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 
@@ -184,7 +185,8 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
   return finite4(vis) ? vis : glm::vec4(1.0f);
 }
 
-glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility) {
+glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility, float* fallback) {
+  if (fallback) *fallback = 0.0f;
   glm::vec4 w, v;
   float sumW = 0.0f;
   for (int i = 0; i < 4; ++i) {
@@ -196,10 +198,24 @@ glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility) 
   w /= sumW;
   const glm::vec4 o = w * v;
   const float s = o.x + o.y + o.z + o.w;
-  if (s >= kOcclusionFallbackSum) return o / s;
-  const float a = s / kOcclusionFallbackSum;
-  const glm::vec4 visible = s > 0.0f ? o / s : glm::vec4(0.0f);
-  return a * visible + (1.0f - a) * w;
+  if (fallback && s < kOcclusionFallbackSum) *fallback = 1.0f - s / kOcclusionFallbackSum;
+  return s > 0.0f ? o / s : w;
+}
+
+glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weights,
+                             const glm::vec4& visibility, const glm::vec3& normal) {
+  float f = 0.0f;
+  const glm::vec4 w = applyOcclusion(weights, visibility, &f);
+  float wf[4] = {w.x, w.y, w.z, w.w};
+  const glm::vec3 visible = shIrradiance(shBlend(probes, wf, 4), normal);
+  if (!(f > 0.0f)) return visible;
+  glm::vec3 dimmest(std::numeric_limits<float>::infinity());
+  for (int i = 0; i < 4; ++i) {
+    const ShRgb* one[1] = {probes[i]};
+    const float unit[1] = {1.0f};
+    dimmest = glm::min(dimmest, shIrradiance(shBlend(one, unit, 1), normal));
+  }
+  return (1.0f - f) * visible + f * dimmest;
 }
 
 }  // namespace tetraprobe

@@ -7,8 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/common.hpp>
+
 #include "test_levels.h"
 #include "tetraprobe/runtime/occlusion.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
 namespace {
@@ -127,12 +130,16 @@ TEST(OcclusionRuntime, ApplyOcclusionDropsOccludedProbes) {
 }
 
 // Whatever comes in (all occluded, NaN, Inf, negative, zero weights), the result is finite, non-negative and
-// sums to 1; all occluded gives the unoccluded weights (the documented fallback), and the blend into it is
-// continuous.
+// sums to 1, and the fallback share is in [0, 1]: 0 with enough visible weight, 1 when every probe is
+// occluded (the weights are then the sanitized input), growing continuously as the visible sum falls.
 TEST(OcclusionRuntime, ApplyOcclusionNeverNaNAndSumsToOne) {
   const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
-  const glm::vec4 all = applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(0.0f));
+  float f = -1.0f;
+  const glm::vec4 all = applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(0.0f), &f);
   EXPECT_NEAR(all.z, 0.3f, 1e-6f);
+  EXPECT_EQ(f, 1.0f);
+  applyOcclusion(glm::vec4(0.1f, 0.2f, 0.3f, 0.4f), glm::vec4(1, 0, 0, 0), &f);
+  EXPECT_EQ(f, 0.0f);
   std::mt19937 rng(6);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   const float specials[] = {0.0f, 1.0f, -1.0f, nan, inf, -inf, 1e-30f, 1e30f};
@@ -142,7 +149,8 @@ TEST(OcclusionRuntime, ApplyOcclusionNeverNaNAndSumsToOne) {
       w[i] = (k % 3 == 0) ? specials[rng() % 8] : u(rng);
       v[i] = (k % 2 == 0) ? specials[rng() % 8] : (u(rng) < 0.5f ? 0.0f : u(rng) * 1e-3f);
     }
-    const glm::vec4 r = applyOcclusion(w, v);
+    const glm::vec4 r = applyOcclusion(w, v, &f);
+    ASSERT_TRUE(f >= 0.0f && f <= 1.0f) << f;
     float sum = 0.0f;
     for (int i = 0; i < 4; ++i) {
       ASSERT_TRUE(std::isfinite(r[i])) << "w=" << w[i] << " v=" << v[i];
@@ -151,13 +159,48 @@ TEST(OcclusionRuntime, ApplyOcclusionNeverNaNAndSumsToOne) {
     }
     ASSERT_NEAR(sum, 1.0f, 1e-5f);
   }
-  // Continuity at the fallback threshold: a visible sum just above and just below it give nearly equal
-  // weights.
+  // Continuity at the fallback threshold: the share is 0 just above it and near 0 just below.
   const glm::vec4 w(0.25f);
   const float s = kOcclusionFallbackSum;
-  const glm::vec4 above = applyOcclusion(w, glm::vec4(4.0f * s * 1.001f, 0, 0, 0));
-  const glm::vec4 below = applyOcclusion(w, glm::vec4(4.0f * s * 0.999f, 0, 0, 0));
-  EXPECT_NEAR(above.x, below.x, 0.01f);
+  float fAbove = -1.0f, fBelow = -1.0f;
+  applyOcclusion(w, glm::vec4(4.0f * s * 1.001f, 0, 0, 0), &fAbove);
+  applyOcclusion(w, glm::vec4(4.0f * s * 0.999f, 0, 0, 0), &fBelow);
+  EXPECT_EQ(fAbove, 0.0f);
+  EXPECT_NEAR(fBelow, 0.001f, 1e-4f);
+}
+
+// The run-time answer: visible probes interpolate; a point that sees none gets its dimmest probe (per
+// channel), not the unoccluded blend; in between the two blend continuously.
+TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheDimmestProbe) {
+  ShRgb sh[4];
+  const float dc[4][3] = {{8.0f, 1.0f, 3.0f}, {2.0f, 4.0f, 3.0f}, {5.0f, 5.0f, 0.5f}, {9.0f, 9.0f, 9.0f}};
+  for (int i = 0; i < 4; ++i) sh[i].c[0] = glm::vec3(dc[i][0], dc[i][1], dc[i][2]);  // constant radiance
+  const ShRgb* probes[4] = {&sh[0], &sh[1], &sh[2], &sh[3]};
+  const glm::vec3 n(0.0f, 0.0f, 1.0f);
+  auto e = [&](int i) {
+    const ShRgb* one[1] = {probes[i]};
+    const float unit[1] = {1.0f};
+    return shIrradiance(shBlend(one, unit, 1), n);
+  };
+  const glm::vec4 w(0.1f, 0.2f, 0.3f, 0.4f);
+  // Two visible: their renormalized blend.
+  const glm::vec3 two = occludedIrradiance(probes, w, glm::vec4(1, 0, 1, 0), n);
+  const glm::vec3 expectTwo = 0.25f * e(0) + 0.75f * e(2);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(two[c], expectTwo[c], 1e-5f * expectTwo[c]);
+  // None visible: the per-channel minimum of the four.
+  const glm::vec3 none = occludedIrradiance(probes, w, glm::vec4(0.0f), n);
+  const glm::vec3 dimmest = glm::min(glm::min(e(0), e(1)), glm::min(e(2), e(3)));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(none[c], dimmest[c], 1e-6f);
+  EXPECT_LT(none.x, 0.5f * (0.1f * e(0).x + 0.2f * e(1).x + 0.3f * e(2).x + 0.4f * e(3).x));
+  // Continuous through the threshold: the answer moves smoothly from the fallback to the visible blend.
+  glm::vec3 prev = none;
+  for (int k = 1; k <= 400; ++k) {
+    const float v = 2.0f * kOcclusionFallbackSum * float(k) / 400.0f / w.x;  // probe 0 alone, fading in
+    const glm::vec3 cur = occludedIrradiance(probes, w, glm::vec4(v, 0, 0, 0), n);
+    for (int c = 0; c < 3; ++c) ASSERT_LE(std::abs(cur[c] - prev[c]), 0.02f * e(3)[c]) << k;
+    prev = cur;
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(prev[c], e(0)[c], 1e-5f * e(0)[c]);
 }
 
 // No occlusion data (or a tet out of range) means every probe is visible: nothing is evaluated.
