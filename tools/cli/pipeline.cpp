@@ -1,6 +1,7 @@
 // The bake pipeline, stage by stage, with timings.
 #include "pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -228,14 +229,31 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     timer.mark("bake");
   }
   if (!shell.empty() && options.importShCsv.empty()) {
-    // Shell probes outside a closed level see the backs of its walls: they take their nearest valid
-    // probe's SH (by the push-out's inside rule, so the same probes would have been rejected as inside).
+    // Shell probes outside a closed level see the backs of its walls (the push-out's inside rule, so the
+    // same probes would have been rejected as inside), or, under a black sky, nothing lit at all (a level
+    // whose walls are closed boxes shows them front faces): either way they carry no light of their own
+    // and take their nearest valid probe's SH. "Nothing lit": mean radiance (the SH's DC term, luminance)
+    // at most 1e-3 of the median over the other probes.
     std::vector<glm::dvec3> pts;
     for (size_t i : shell) pts.push_back(probes[i]);
     const std::vector<Clearance> c =
         tracerClearance(tracer, options.bake.threads)(pts, std::vector<double>(pts.size(), options.spacing));
+    auto dc = [&](size_t i) {
+      const glm::vec3 v = level.sh[i].c[0];
+      return 0.2126 * double(v.r) + 0.7152 * double(v.g) + 0.0722 * double(v.b);
+    };
     std::vector<uint8_t> invalid(probes.size(), 0);
-    for (size_t k = 0; k < shell.size(); ++k) invalid[shell[k]] = c[k].inside ? 1 : 0;
+    std::vector<double> interior;
+    for (size_t i = 0; i < probes.size(); ++i) interior.push_back(dc(i));
+    for (size_t i : shell) interior[i] = -1.0;
+    interior.erase(std::remove(interior.begin(), interior.end(), -1.0), interior.end());
+    double median = 0.0;
+    if (!interior.empty()) {
+      std::nth_element(interior.begin(), interior.begin() + long(interior.size() / 2), interior.end());
+      median = interior[interior.size() / 2];
+    }
+    for (size_t k = 0; k < shell.size(); ++k)
+      invalid[shell[k]] = c[k].inside || !(dc(shell[k]) > 1e-3 * median) ? 1 : 0;
     stats.dilatedProbes = dilateInvalidProbes(probes, invalid, level.sh, &dilatedFrom);
     timer.mark("dilate");
   }
