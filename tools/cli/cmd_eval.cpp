@@ -30,7 +30,8 @@ int cmdEval(int argc, char** argv) {
        {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
         "0.98"},
        {"--report", "", "FILE.json", "write the figures as JSON", ""},
-       {"--points-out", "", "FILE.csv", "write every point: position, normal, reference, stderr, lookups",
+       {"--points-out", "", "FILE.csv",
+        "write every point: position, normal, reference, stderr, direct part of the reference, lookups",
         ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
@@ -90,7 +91,8 @@ int cmdEval(int argc, char** argv) {
                 (unsigned long long)m.bytes);
 
   if (args.has("--points-out")) {
-    std::string csv = "x,y,z,nx,ny,nz,ref_r,ref_g,ref_b,stderr_r,stderr_g,stderr_b";
+    std::string csv =
+        "x,y,z,nx,ny,nz,ref_r,ref_g,ref_b,stderr_r,stderr_g,stderr_b,direct_r,direct_g,direct_b";
     for (const auto& m : report.methods) csv += "," + m.name + "_r," + m.name + "_g," + m.name + "_b";
     csv += "\n";
     char buf[64];
@@ -104,6 +106,7 @@ int cmdEval(int argc, char** argv) {
       for (int k = 0; k < 3; ++k) add(p.surface.normal[k]);
       for (int k = 0; k < 3; ++k) add(p.reference.irradiance[k]);
       for (int k = 0; k < 3; ++k) add(p.reference.stderror[k]);
+      for (int k = 0; k < 3; ++k) add(p.direct[k]);
       for (const auto& m : report.methods)
         for (int k = 0; k < 3; ++k) add(m.values[i][k]);
       csv.back() = '\n';
