@@ -242,6 +242,38 @@ TEST_F(Cli, SampleLitRoomBrighterThanDarkRoom) {
   EXPECT_GT(bg, 0.0f) << "light reaches the dark room through the doorway";
 }
 
+// Shell probes: the bundled sample is closed under a black sky, so every shell probe sees the backs of its
+// walls or nothing lit and is dilated; --shell-spacing 0 leaves them out. Either way the two faces of the
+// partition wall, 0.2 m apart, do not share light: the dark room's face (x = 4.2, facing +x) gets a small
+// fraction of the lit room's face (x = 4.0, facing -x) at the same height, away from the doorway (z 1.5-2.5).
+TEST_F(Cli, ShellProbesAreDilatedAndThePartitionDoesNotLeak) {
+  for (const std::string shell : {"auto", "0"}) {
+    const std::string level = path("s" + shell + ".tpb").string(), report = path(shell + ".json").string();
+    const CliRun bake = run("bake " + sample() + " --spacing 0.5 --samples 64 --shell-spacing " + shell +
+                            " -o " + level + " --report " + report);
+    ASSERT_EQ(bake.code, 0) << bake.err;
+    const auto j = nlohmann::json::parse(slurp(report));
+    const int shellProbes = j.at("probes").at("shell").get<int>();
+    if (shell == "0") {
+      EXPECT_EQ(shellProbes, 0);
+    } else {
+      EXPECT_GT(shellProbes, 100);
+      EXPECT_EQ(j.at("probes").at("dilated").get<int>(), shellProbes);
+    }
+    for (const char* z : {"0.6", "3.4"}) {
+      const CliRun lit = run("query " + level + " 4.0 1.2 " + z + " -1 0 0");
+      const CliRun dark = run("query " + level + " 4.2 1.2 " + z + " 1 0 0");
+      ASSERT_EQ(lit.code, 0) << lit.err;
+      ASSERT_EQ(dark.code, 0) << dark.err;
+      float lr, lg, lb, dr, dg, db;
+      ASSERT_EQ(std::sscanf(lit.out.c_str(), "%f,%f,%f", &lr, &lg, &lb), 3);
+      ASSERT_EQ(std::sscanf(dark.out.c_str(), "%f,%f,%f", &dr, &dg, &db), 3);
+      EXPECT_LT(dg, 0.25f * lg) << "shell " << shell << " z " << z << ": dark face " << dg << ", lit face "
+                                << lg;
+    }
+  }
+}
+
 // SH exchange with an engine's own baker: export a level's probes, import them into a new bake with deringing
 // off, and the new level's probes and SH are the same bytes (positions and coefficients survive the CSV
 // exactly).
