@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <vector>
@@ -15,6 +17,7 @@
 
 #include "test_levels.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
 namespace {
@@ -131,6 +134,125 @@ TEST(Locate, BoundaryPointsGetWeightsWithinToleranceTenKmOut) {
   const glm::dvec3 at(10'000.0, 35.0, -10'000.0);
   checkBoundaryPoints(test::makeLevel(sliverPoints(at, 0.02, 6), at + glm::dvec3(4.0), 3), "10 km, local");
   checkBoundaryPoints(test::makeLevel(sliverPoints(at, 0.02, 7), glm::dvec3(0.0), 4), "10 km, world");
+}
+
+// Irradiance E(n) of local point x answered from tet `tet` with its exact weights (clamped to >= 0, as locate()
+// clamps): the public SH API (shBlend, shIrradiance) on the tet's four probes, in the order tet.v[] names
+// them, or rotated by `rotate` places (the test's own control: a wrong probe order). `scale` gets the sum of
+// the magnitudes of the terms E is made of (sum over coefficients of |A_l Y(n)| sum_k w_k |SH_k|): float
+// rounding is relative to that, not to |E|, which may cancel to near 0.
+glm::vec3 irradianceFromTet(const Level& level, int32_t tet, const glm::dvec3& x, const glm::vec3& normal,
+                            int rotate, double* scale) {
+  const Tet& t = level.tets[size_t(tet)];
+  double w[4];
+  test::exactTetWeights(level, t, x, w);
+  const ShRgb* probes[4];
+  float wf[4];
+  for (int i = 0; i < 4; ++i) {
+    probes[i] = &level.sh[size_t(t.v[(i + rotate) % 4])];
+    wf[i] = float(std::max(w[i], 0.0));
+  }
+  const auto y = shBasis<double>(normal.x, normal.y, normal.z);
+  *scale = 0.0;
+  for (int c = 0; c < kShCoeffCount; ++c)
+    for (int i = 0; i < 4; ++i)
+      for (int ch = 0; ch < 3; ++ch)
+        *scale +=
+            std::abs(y[size_t(c)] * shCosineLobe(c)) * double(wf[i]) * std::abs(double(probes[i]->c[c][ch]));
+  return shIrradiance(shBlend(probes, wf, 4), normal);
+}
+
+double relativeDifference(const glm::vec3& a, const glm::vec3& b, double scale) {
+  double d = 0.0;
+  for (int ch = 0; ch < 3; ++ch) d = std::max(d, std::abs(double(a[ch]) - double(b[ch])));
+  return d / scale;
+}
+
+// Points shared by two or more tets (every tet's vertices, edge midpoints and edge points, face points and
+// centroids of sliver-rich and cospherical levels): the irradiance answered from each tet holding the point
+// (exact weights within 1e-9 of [0, 1], through shBlend/shIrradiance), and the query's own answers
+// (irradiance() without a hint, with each holder as the cached tet, and irradianceBatch) agree to 1e-6
+// relative. Why 1e-6: the weights agree to ~1e-12 across holders (exact signed volumes), float weights and
+// the float blend + 9-term sum add at most ~15 roundings of 2^-24 of the terms' magnitudes (~1e-6 in the
+// worst case, ~1e-7 typically), so a correct pipeline stays inside it, while a wrong probe order or weights
+// off by more than ~1e-6 (the rows' own error on slivers reaches 1e-4) leave it. The control checks that:
+// the same points with one holder's probes rotated must fail the check.
+void checkIrradianceWhereTetsSharePoint(const Level& level, const char* what) {
+  const ProbeQuery q(level, 4.0f, 1);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<glm::dvec3> shared;  // world
+  std::vector<glm::vec3> normals;
+  std::vector<std::vector<int32_t>> holders;
+  size_t vertices = 0, edges = 0, faces = 0;
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
+    const double a = u(rng), b = u(rng) * (1.0 - a);
+    const glm::dvec3 points[] = {p[t % 4],                                          // a vertex
+                                 0.5 * (p[0] + p[1]), a * p[2] + (1.0 - a) * p[3],  // edges
+                                 a * p[0] + b * p[1] + (1.0 - a - b) * p[2],
+                                 (p[1] + p[2] + p[3]) / 3.0};  // faces
+    for (int k = 0; k < 5; ++k) {
+      const glm::dvec3& x = points[k];
+      std::vector<int32_t> h;
+      for (size_t s = 0; s < level.tets.size(); ++s) {
+        double w[4];
+        test::exactTetWeights(level, level.tets[s], x, w);
+        if (std::min({w[0], w[1], w[2], w[3]}) >= -1e-9) h.push_back(int32_t(s));
+      }
+      if (h.size() < 2) continue;  // on the hull: one tet (and the outer cells)
+      (k == 0 ? vertices : k < 3 ? edges : faces) += 1;
+      shared.push_back(level.origin + x);
+      normals.push_back(glm::normalize(glm::vec3(g(rng), g(rng), g(rng)) + glm::vec3(0.0f, 1e-3f, 0.0f)));
+      holders.push_back(std::move(h));
+    }
+  }
+  ASSERT_GT(vertices, 0u) << what;
+  ASSERT_GT(edges, level.tets.size() / 2) << what;
+  ASSERT_GT(faces, level.tets.size() / 2) << what;
+  std::vector<glm::vec3> batch(shared.size());
+  q.irradianceBatch(shared.data(), normals.data(), batch.data(), shared.size(), 2);
+  double worst = 0.0;
+  size_t controlCaught = 0;
+  for (size_t i = 0; i < shared.size() && !::testing::Test::HasFailure(); ++i) {  // stop at the first
+    const glm::dvec3 x = shared[i] - level.origin;
+    double scale = 0.0;
+    const glm::vec3 ref = irradianceFromTet(level, holders[i][0], x, normals[i], 0, &scale);
+    const auto expectAgrees = [&](const glm::vec3& e, const char* from, int32_t tet) {
+      const double r = relativeDifference(e, ref, scale);
+      worst = std::max(worst, r);
+      ASSERT_LE(r, 1e-6) << what << ": point (" << x.x << ", " << x.y << ", " << x.z << "), " << from << " "
+                         << tet << " gives (" << e.x << ", " << e.y << ", " << e.z << "), tet "
+                         << holders[i][0] << " (" << ref.x << ", " << ref.y << ", " << ref.z << "); "
+                         << holders[i].size() << " tets hold the point";
+    };
+    for (int32_t h : holders[i]) {
+      double s = 0.0;
+      expectAgrees(irradianceFromTet(level, h, x, normals[i], 0, &s), "holder", h);
+      int32_t cache = h;  // the cached-tet walk starting in this holder
+      expectAgrees(q.irradiance(shared[i], normals[i], &cache), "irradiance() cached from", h);
+    }
+    expectAgrees(q.irradiance(shared[i], normals[i]), "irradiance() from tet", q.locate(shared[i]).tet);
+    expectAgrees(batch[i], "irradianceBatch from tet", q.locate(shared[i]).tet);
+    double s = 0.0;
+    const glm::vec3 wrong = irradianceFromTet(level, holders[i][1], x, normals[i], 1, &s);
+    controlCaught += relativeDifference(wrong, ref, scale) > 1e-6;
+  }
+  EXPECT_GT(controlCaught, shared.size() * 9 / 10) << what << ": a wrong probe order should fail the check";
+  std::printf("[ %s: %zu shared points (%zu vertices, %zu edges, %zu faces), worst %.2g relative ]\n", what,
+              shared.size(), vertices, edges, faces, worst);
+}
+
+TEST(Locate, IrradianceAgreesWhereTetsSharePoint) {
+  const glm::dvec3 at(-4.0, 1.0, 2.0);
+  checkIrradianceWhereTetsSharePoint(test::makeLevel(sliverPoints(at, 0.02, 5), at + glm::dvec3(4.0), 2),
+                                     "slivers");
+  const glm::dvec3 far(10'000.0, 35.0, -10'000.0);
+  checkIrradianceWhereTetsSharePoint(test::makeLevel(sliverPoints(far, 0.02, 7), glm::dvec3(0.0), 4),
+                                     "10 km, world frame");
+  checkIrradianceWhereTetsSharePoint(test::makeLevel(sliverPoints(at, 0.0, 8), at, 5), "cospherical lattice");
 }
 
 }  // namespace
