@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <system_error>
 #include <thread>
@@ -49,6 +50,7 @@ constexpr size_t kMinBatchPerThread = 256;
 constexpr int kPlainSteps = 8;
 constexpr int kHintPlainSteps = 3;    // irradianceBatch: steps from the previous query's tet
 constexpr size_t kBatchGroup = 16;    // irradianceBatch: queries interleaved stage by stage
+constexpr size_t kHintRecent = 4;     // irradianceBatch: "coherent" while the hint answered this recently
 constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
 // A smallest float-row weight within this of 0 (or within the rows' rounding bound, rowErrorBound) switches
 // the walk to exact weights. 1e-4 covers the rows' rounding on ordinary tets with a wide margin.
@@ -114,8 +116,43 @@ inline int minIndex(const double w[4]) {
   return m;
 }
 
+// A tet prepared for testing many nearby points (irradianceBatch's previous tet): its rows converted to
+// double once, and the column sums of their magnitudes, so a point's weights are tetWeights()'s (the same
+// operations on the same values) and the rounding bound costs three products instead of twelve.
+struct PreparedTet {
+  int32_t tet = -1;
+  double row[3][4];
+  double absCol[4];  // sum_i |row[i][j]| for j = 0..2, then sum_i |row[i][3]|
+
+  void prepare(const std::vector<Tet>& tets, int32_t t) {
+    tet = t;
+    const Tet& r = tets[size_t(t)];
+    for (int j = 0; j < 4; ++j) {
+      absCol[j] = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        row[i][j] = double(r.row[i][j]);
+        absCol[j] += std::abs(row[i][j]);
+      }
+    }
+  }
+
+  // w = tetWeights(tets[tet], x); true when clearlyInside(tets[tet], x, min w) holds. The bound used is
+  // rowErrorBound's sum taken in another order, times (1 + 2^-40): at least rowErrorBound(tet, x) (the two
+  // sums of 12 non-negative terms differ by far less than 2^-40 relative), so this may refuse a point
+  // clearlyInside accepts (the caller then takes the full path), never the reverse.
+  bool clearlyHolds(const glm::dvec3& x, double w[4]) const {
+    for (int i = 0; i < 3; ++i) w[i] = row[i][0] * x.x + row[i][1] * x.y + row[i][2] * x.z + row[i][3];
+    w[3] = 1.0 - w[0] - w[1] - w[2];
+    const double wMin = w[minIndex(w)];
+    if (!(wMin >= kBoundaryBand)) return false;
+    const double e =
+        absCol[0] * std::abs(x.x) + absCol[1] * std::abs(x.y) + absCol[2] * std::abs(x.z) + absCol[3];
+    return wMin > (1.0 + 0x1p-40) * (2.0 * 0x1p-24 * e);
+  }
+};
+
 // Clamps to >= 0 and renormalizes; a degenerate sum (all clamped away, or non-finite) gives equal weights.
-Location finish(int32_t tet, const double w[4], bool inside) {
+inline Location finish(int32_t tet, const double w[4], bool inside) {
   double c[4], sum = 0.0;
   for (int i = 0; i < 4; ++i) {
     c[i] = w[i] > 0.0 ? w[i] : 0.0;  // NaN -> 0
@@ -133,24 +170,51 @@ Location finish(int32_t tet, const double w[4], bool inside) {
   return loc;
 }
 
+// finish(tet, w, true) for weights that are all positive and finite (PreparedTet::clearlyHolds accepted
+// them): the same operations without the clamps and checks that cannot fire.
+inline Location finishClear(int32_t tet, const double w[4]) {
+  const double sum = ((w[0] + w[1]) + w[2]) + w[3];  // finish's 0.0 + w[0] is w[0]: w[0] > 0
+  Location loc;
+  loc.tet = tet;
+  loc.inside = true;
+  for (int i = 0; i < 4; ++i) loc.weights[i] = float(w[i] / sum);
+  return loc;
+}
+
 // Local-frame point with a defined value for any input: NaN components go to the probe bounds' centre,
 // +-Inf to the bounds, and points absurdly far away are pulled radially to `maxRadius` from the centre (the
 // direction is kept, so the hull tet found is the same; the weights stay far from overflow).
-glm::dvec3 sanitize(glm::dvec3 x, const StartGrid& g) {
-  const glm::dvec3 lo(g.min), hi = lo + glm::dvec3(g.cellSize) * glm::dvec3(g.dims);
-  const glm::dvec3 centre = 0.5 * (lo + hi);
+// The bounds it needs are computed once per batch (SanitizeFrame), with the same operations as per query.
+struct SanitizeFrame {
+  glm::dvec3 lo, hi, centre;
+  double maxRadius;
+};
+
+SanitizeFrame sanitizeFrame(const StartGrid& g) {
+  SanitizeFrame f;
+  f.lo = glm::dvec3(g.min);
+  f.hi = f.lo + glm::dvec3(g.cellSize) * glm::dvec3(g.dims);
+  f.centre = 0.5 * (f.lo + f.hi);
+  f.maxRadius = 1e6 * (glm::length(f.hi - f.lo) + 1.0);
+  return f;
+}
+
+inline glm::dvec3 sanitize(glm::dvec3 x, const SanitizeFrame& f) {
   for (int a = 0; a < 3; ++a) {
-    if (std::isnan(x[a])) x[a] = centre[a];
-    if (std::isinf(x[a])) x[a] = x[a] > 0 ? hi[a] : lo[a];
+    if (std::isnan(x[a])) x[a] = f.centre[a];
+    if (std::isinf(x[a])) x[a] = x[a] > 0 ? f.hi[a] : f.lo[a];
   }
-  const double maxRadius = 1e6 * (glm::length(hi - lo) + 1.0);
-  const glm::dvec3 d = x - centre;
+  const glm::dvec3 d = x - f.centre;
   const double far = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
-  if (far > maxRadius) {
+  if (far > f.maxRadius) {
     const glm::dvec3 dir = d / far;  // scaled first: |d|^2 could overflow
-    x = centre + dir * (maxRadius / glm::length(dir));
+    x = f.centre + dir * (f.maxRadius / glm::length(dir));
   }
   return x;
+}
+
+glm::dvec3 sanitize(const glm::dvec3& x, const StartGrid& g) {
+  return sanitize(x, sanitizeFrame(g));
 }
 
 int32_t gridCell(const StartGrid& g, const glm::dvec3& x) {
@@ -282,23 +346,62 @@ inline int32_t plainStep(const std::vector<Tet>& tets, const glm::dvec3& x, int3
   return t.n[m];
 }
 
+#if defined(__GNUC__) && defined(__has_builtin)
+#if __has_builtin(__builtin_shufflevector)
+#define TETRAPROBE_FLOAT4 1
+#endif
+#endif
+
+#ifdef TETRAPROBE_FLOAT4
+typedef float Float4 __attribute__((vector_size(16)));  // GCC/Clang vector extension: one SSE/NEON register
+
+inline Float4 load4(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+#endif
+
 // shIrradiance(shBlend(the tet's 4 probes, weights), normal), inlined: the same float operations in the same
-// order (so the same bits), over the 27 floats of each record as one flat loop the compiler vectorizes.
+// order (so the same bits). With GCC/Clang vectors: the 27-float blend b as 7 vectors of 4 (the last starting
+// at float 23, overlapping the sixth: no read past a record), then the 9 irradiance terms with the three
+// channels in the lanes of one vector (b[3i..3i+2] shuffled out of the registers, not stored and reloaded),
+// each lane summing its terms in shIrradiance's order.
 inline glm::vec3 blendIrradiance(const std::vector<ShRgb>& sh, const Tet& t, const glm::vec4& weights,
                                  const glm::vec3& normal) {
   static_assert(sizeof(ShRgb) == 27 * sizeof(float));
   const float* p[4];
   for (int i = 0; i < 4; ++i) p[i] = reinterpret_cast<const float*>(&sh[size_t(t.v[i])]);
   const float w0 = weights[0], w1 = weights[1], w2 = weights[2], w3 = weights[3];
+  const auto y = shBasis<float>(normal.x, normal.y, normal.z);
+  float f[kShCoeffCount];
+  for (int i = 0; i < kShCoeffCount; ++i) f[i] = y[size_t(i)] * float(shCosineLobe(i));
+#ifdef TETRAPROBE_FLOAT4
+  const auto blend = [&](int j) {
+    return ((load4(p[0] + j) * w0 + load4(p[1] + j) * w1) + load4(p[2] + j) * w2) + load4(p[3] + j) * w3;
+  };
+  const Float4 b0 = blend(0), b4 = blend(4), b8 = blend(8), b12 = blend(12), b16 = blend(16), b20 = blend(20),
+               b23 = blend(23);
+  // Lane c of term i is b[3i + c] (lane 3 unused).
+  const Float4 term[kShCoeffCount] = {b0,
+                                      __builtin_shufflevector(b0, b4, 3, 4, 5, 6),
+                                      __builtin_shufflevector(b4, b8, 2, 3, 4, 5),
+                                      __builtin_shufflevector(b8, b12, 1, 2, 3, 4),
+                                      b12,
+                                      __builtin_shufflevector(b12, b16, 3, 4, 5, 6),
+                                      __builtin_shufflevector(b16, b20, 2, 3, 4, 5),
+                                      __builtin_shufflevector(b20, b23, 1, 2, 4, 5),
+                                      __builtin_shufflevector(b23, b23, 1, 2, 3, 3)};
+  Float4 e = {0.0f, 0.0f, 0.0f, 0.0f};
+  for (int i = 0; i < kShCoeffCount; ++i) e += term[i] * f[i];
+  return glm::vec3(e[0], e[1], e[2]);
+#else
   float b[27];
   for (int j = 0; j < 27; ++j) b[j] = ((p[0][j] * w0 + p[1][j] * w1) + p[2][j] * w2) + p[3][j] * w3;
-  const auto y = shBasis<float>(normal.x, normal.y, normal.z);
   glm::vec3 e(0.0f);
-  for (int i = 0; i < kShCoeffCount; ++i) {
-    const float f = y[size_t(i)] * float(shCosineLobe(i));
-    e += glm::vec3(b[3 * i], b[3 * i + 1], b[3 * i + 2]) * f;
-  }
+  for (int i = 0; i < kShCoeffCount; ++i) e += glm::vec3(b[3 * i], b[3 * i + 1], b[3 * i + 2]) * f[i];
   return e;
+#endif
 }
 
 inline void prefetchTet(const std::vector<Tet>& tets, int32_t t) {
@@ -551,8 +654,12 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
     int32_t exitFace = -1;
     if (walk(level_.tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace) && exitFace < 0) return loc;
   }
-  // The cell grid's leaf names the walk's start; the walk decides the answer (so it does not depend on how
-  // the tree was split), stepping to the neighbour or out to the outer cells as needed.
+  return gridLocate(x);
+}
+
+// The cell grid's leaf names the walk's start; the walk decides the answer (so it does not depend on how the
+// tree was split), stepping to the neighbour or out to the outer cells as needed.
+Location ProbeQuery::gridLocate(const glm::dvec3& x) const {
   int32_t count = 0;
   const int32_t* leaf = cellGridLeaf(cellGrid(), x, &count);
   int32_t cur = startTet(x, leaf, count);
@@ -613,8 +720,11 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
 // through locate()'s stages in lock step, each stage prefetching what the next needs for every query of the
 // group, so their misses overlap (group prefetching, Chen et al., "Improving hash join performance through
 // prefetching", ICDE 2004). Coherent queries (pixel order) first try the previous query's tet when they lie
-// within a quarter cell of the previous query: a few steps from it to a tet that holds the point clearly (by more than the rows' rounding)
-// give the answer the full locate() gives, as no other tet can hold such a point within tolerance.
+// within a quarter cell of the previous query: a few steps from it to a tet that holds the point clearly (by
+// more than the rows' rounding) give the answer the full locate() gives, as no other tet can hold such a point
+// within tolerance. That tet is kept prepared (PreparedTet: double rows, a three-product rounding bound), and
+// a query it misses shortly after a hit is located at once rather than in the group's pipeline, so the next
+// query starts from its tet. Without occlusion the SH blend and irradiance run inline (blendIrradiance).
 // Every stage computes what locate() computes, in the same order: out[i] is bit-identical to
 // irradiance(world[i], normal[i]).
 void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t begin,
@@ -627,33 +737,45 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
   size_t slot[kBatchGroup];
   bool haveKey[kBatchGroup], done[kBatchGroup];
   Location loc[kBatchGroup];
-  int32_t prevTet = -1;
+  PreparedTet hint;  // the previous query's tet
+  // Queries since the hint last answered one: while small (coherent order) a query the hint misses is
+  // located at once, so the next one has its tet as hint (deferring it to the group's pipeline would leave
+  // the rest of the group a stale hint, a few tets behind).
+  size_t sinceHit = kBatchGroup;
   glm::dvec3 prevX(std::numeric_limits<double>::infinity());
   const double hintGate = 0.25 * double(grid.cellSize);
+  const SanitizeFrame frame = sanitizeFrame(grid_);
   for (size_t g = begin; g < end; g += kBatchGroup) {
     const size_t n = std::min(kBatchGroup, end - g);
     // The local point and its cell; the previous query's tet for a point in the same cell.
     for (size_t k = 0; k < n; ++k) {
-      x[k] = sanitize(world[g + k] - level_.origin, grid_);
+      x[k] = sanitize(world[g + k] - level_.origin, frame);
       done[k] = false;
       const glm::dvec3 d = glm::abs(x[k] - prevX);
       prevX = x[k];
-      if (prevTet >= 0 && std::max({d.x, d.y, d.z}) < hintGate) {
-        int32_t t = prevTet;
-        for (int s = 0; s <= kHintPlainSteps && t >= 0; ++s) {
-          double w[4];
-          tetWeights(tets[size_t(t)], x[k], w);
+      ++sinceHit;
+      if (hint.tet >= 0 && std::max({d.x, d.y, d.z}) < hintGate) {
+        double w[4];
+        done[k] = hint.clearlyHolds(x[k], w);
+        // Else up to kHintPlainSteps plain steps (across a face the rows put x clearly beyond) from it.
+        for (int s = 0; s < kHintPlainSteps && !done[k]; ++s) {
+          const Tet& t = tets[size_t(hint.tet)];
           const int m = minIndex(w);
-          if (clearlyInside(tets[size_t(t)], x[k], w[m])) {
-            loc[k] = finish(t, w, true);
-            done[k] = true;
-            prevTet = t;
-            break;
-          }
-          t = w[m] < -kInsideEps && !nearFace(tets[size_t(t)], x[k], w[m]) ? tets[size_t(t)].n[m] : -1;
+          if (!(w[m] < -kInsideEps) || nearFace(t, x[k], w[m]) || t.n[m] < 0) break;
+          hint.prepare(tets, t.n[m]);
+          prefetchSh(level_, tets[size_t(hint.tet)]);
+          done[k] = hint.clearlyHolds(x[k], w);
+        }
+        if (done[k]) {
+          loc[k] = finishClear(hint.tet, w);
+          sinceHit = 0;
+          continue;
         }
       }
-      if (done[k]) {
+      if (sinceHit <= kHintRecent) {
+        loc[k] = gridLocate(x[k]);
+        done[k] = true;
+        if (loc[k].inside) hint.prepare(tets, loc[k].tet);
         prefetchSh(level_, tets[size_t(loc[k].tet)]);
         continue;
       }
@@ -728,8 +850,13 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       loc[k] = walkFrom(x[k], cur[k], -1);
       if (loc[k].tet >= 0) prefetchSh(level_, tets[size_t(loc[k].tet)]);
     }
-    for (size_t k = 0; k < n; ++k) out[g + k] = shade(loc[k], world[g + k], normal[g + k]);
-    if (loc[n - 1].inside) prevTet = loc[n - 1].tet;
+    if (usesOcclusion()) {
+      for (size_t k = 0; k < n; ++k) out[g + k] = shade(loc[k], world[g + k], normal[g + k]);
+    } else {  // shade() without occlusion, inlined (every located query has a tet)
+      for (size_t k = 0; k < n; ++k)
+        out[g + k] = blendIrradiance(level_.sh, tets[size_t(loc[k].tet)], loc[k].weights, normal[g + k]);
+    }
+    if (loc[n - 1].inside && loc[n - 1].tet != hint.tet) hint.prepare(tets, loc[n - 1].tet);
   }
 }
 

@@ -98,6 +98,7 @@ class ProbeQuery {
   }
 
  private:
+  Location gridLocate(const glm::dvec3& x) const;  // locate() without a hint, from the local point
   Location outerLocate(const glm::dvec3& x, int32_t startCell) const;
   Location walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const;
   Location outerScan(const glm::dvec3& x, const Location& fallback) const;
