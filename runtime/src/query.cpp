@@ -702,14 +702,13 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
   // A point that sees none of its probes blends into the dimmest of them (occludedIrradiance).
   if (usesOcclusion()) {
     const glm::vec3 local(world - level_.origin);
+    const glm::vec4 vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
     float fallback = 0.0f;
-    weights = applyOcclusion(weights, occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal),
-                             &fallback);
+    weights = applyOcclusion(weights, vis, &fallback);
     if (fallback > 0.0f) {
       const ShRgb* probes[4] = {&level_.sh[size_t(t.v[0])], &level_.sh[size_t(t.v[1])],
                                 &level_.sh[size_t(t.v[2])], &level_.sh[size_t(t.v[3])]};
-      return occludedIrradiance(
-          probes, loc.weights, occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal), normal);
+      return occludedIrradiance(probes, loc.weights, vis, normal);
     }
   }
   return blendIrradiance(level_.sh, t, weights, normal);
