@@ -242,11 +242,11 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       const glm::vec3 v = level.sh[i].c[0];
       return 0.2126 * double(v.r) + 0.7152 * double(v.g) + 0.0722 * double(v.b);
     };
-    std::vector<uint8_t> invalid(probes.size(), 0);
+    std::vector<uint8_t> invalid(probes.size(), 0), isShell(probes.size(), 0);
+    for (size_t i : shell) isShell[i] = 1;
     std::vector<double> interior;
-    for (size_t i = 0; i < probes.size(); ++i) interior.push_back(dc(i));
-    for (size_t i : shell) interior[i] = -1.0;
-    interior.erase(std::remove(interior.begin(), interior.end(), -1.0), interior.end());
+    for (size_t i = 0; i < probes.size(); ++i)
+      if (!isShell[i]) interior.push_back(dc(i));
     double median = 0.0;
     if (!interior.empty()) {
       std::nth_element(interior.begin(), interior.begin() + long(interior.size() / 2), interior.end());
