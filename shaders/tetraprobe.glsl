@@ -8,8 +8,9 @@
 //   is albedo * E / pi. E can be slightly negative where the L2 projection rings; clamp if you need to.
 // - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: a walk from `hint` (a tet index, e.g. last
 //   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
-//   the middle tet of the sparse cell grid's BSP leaf holding localPos (else, for an absent cell, the
-//   start-grid cell's tet; at most tetraprobeMaxWalkSteps), else a scan of every tet. Each step
+//   the tet named by the sparse cell grid's BSP leaf holding localPos, which holds it but within rounding of
+//   a face (else, for an absent cell or empty leaf, the start-grid cell's tet; at most
+//   tetraprobeMaxWalkSteps), else a scan of every tet. Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
@@ -386,7 +387,7 @@ uint tetraprobeCellHash(ivec3 k) {
   return h;
 }
 
-// The middle tet of the BSP leaf holding local point x, or -1 (no grid, cell absent, empty leaf).
+// The tet named by the BSP leaf holding local point x, or -1 (no grid, cell absent, empty leaf).
 int tetraprobeCellStartTet(vec3 x) {
   if (tetraprobeCellMaxProbe == 0u) return -1;
   vec3 f = floor((x - tetraprobeCellMin) / tetraprobeCellSize);
@@ -408,16 +409,13 @@ int tetraprobeCellStartTet(vec3 x) {
   }
   if (!found) return -1;
   for (int d = 0; d < 256 && node >= 0; ++d) {
-    int b = tetraprobeCellNodeOffset + 8 * node;
+    int b = tetraprobeCellNodeOffset + 6 * node;
     vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1],
                                    tetraprobeCellData[b + 2], tetraprobeCellData[b + 3]));
     precise float s = pl.x * x.x + pl.y * x.y + pl.z * x.z + pl.w;
     node = tetraprobeCellData[b + 4 + (s >= 0.0 ? 1 : 0)];
   }
-  if (node >= 0) return -1;
-  int leaf = tetraprobeCellLeafOffset - (node + 1);
-  int count = tetraprobeCellData[leaf];
-  return count > 0 ? tetraprobeCellData[leaf + 1 + count / 2] : -1;
+  return node >= 0 || node == int(0x80000000u) ? -1 : ~node;
 }
 
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can

@@ -65,16 +65,16 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly 
 };
 
 // The sparse cell grid + BSP (tetraprobe::GpuCellGridHeader, runtime/cell_grid.h). data[]: hash slots at 0
-// (4 ints: key x, y, z, root; key x = INT_MIN when empty), BSP nodes at tetraprobeCellNodeOffset (8 ints:
-// plane as float bits, child under, child over, 2 pad), leaves at tetraprobeCellLeafOffset (a count, then
-// tets). A root or child < 0 names the leaf at tetraprobeCellLeafOffset - (child + 1).
+// (4 ints: key x, y, z, root; key x = INT_MIN when empty), BSP nodes at tetraprobeCellNodeOffset (6 ints:
+// plane as float bits, child under, child over). A root or child < 0 is a leaf: the tet ~child, or no tet
+// when it is INT_MIN.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly buffer TetraprobeCells {
   vec3 tetraprobeCellMin;        // offset 0, local frame, metres
   float tetraprobeCellSize;      // offset 12, metres
   uint tetraprobeCellSlotMask;   // offset 16: slots - 1
   uint tetraprobeCellMaxProbe;   // offset 20: longest probe sequence; 0 = no grid
   int tetraprobeCellNodeOffset;  // offset 24
-  int tetraprobeCellLeafOffset;  // offset 28
+  int tetraprobeCellReserved;    // offset 28
   int tetraprobeCellData[];      // offset 32
 };
 

@@ -1,13 +1,24 @@
 // Sparse hash grid of BSP trees over the probe tets (Valient, "Taking Killzone Shadow Fall image quality
 // into the next generation", GDC 2014: 16 m cells found through a hash, a BSP per cell; split scoring after
-// Godot 4's LightmapGI, scene/3d/lightmap_gi.cpp).
+// Godot 4's LightmapGI, scene/3d/lightmap_gi.cpp, which also splits down to one tet per leaf).
 //
-// Robustness: a tet goes to a child when any of its vertices lies within `margin` of that child's side of the
-// plane (evaluated in double from the float plane the query uses), so a query point within rounding of a
-// plane finds its tet on either side; the query starts the walk (query.cpp) from a leaf tet, which makes the
-// answer independent of the splits. A split is kept only when each child sheds at least a fifth of the
-// node's tets (kMaxChildShare): below about one tet per region every face plane straddles most of them, and
-// copying straddlers into both children would grow the tree without shrinking its leaves.
+// Exact regions. Classifying a tet by its vertices' sides of each split plane alone keeps, in a node, tets
+// that straddle every ancestor plane without meeting the node's region; lists then stop shrinking and leaves
+// cannot get down to one tet. So every node carries its region, a convex polytope (the cell's box clipped by
+// the ancestors' planes, face polygons in double), and a tet straddling a split goes to a child only when it
+// overlaps the child's region: it is dropped when a face plane of the region puts all four of its vertices
+// outside, or a face plane of the tet puts all the region's vertices outside, each within the margin (a
+// tet touching the region only within rounding is dropped). Separating planes along edge pairs are not
+// tried, so a list may keep a tet that misses the region: a node whose region lies inside one of its tets
+// (all region vertices within the margin of it) is a leaf naming that tet all the same. A leaf is also
+// made, naming the tet holding the region's centroid best, when no face plane of the node's tets cuts its
+// region or at depth kMaxDepth (unprovenLeaves counts those).
+//
+// Robustness: the query evaluates a node's float plane in double; the region is clipped by that same float
+// plane (in double), so a point's leaf region contains it, up to the clipping's rounding (~1e-16 relative).
+// A point within the margin of a leaf region's face may lie in a neighbouring tet instead: the walk the query
+// starts from the leaf's tet (query.cpp) takes that step with exact weights, so the answer never depends on
+// the splits.
 #include "tetraprobe/runtime/cell_grid.h"
 
 #include "tetraprobe/runtime/level.h"
@@ -16,20 +27,22 @@
 #include <atomic>
 #include <climits>
 #include <cmath>
+#include <limits>
 #include <system_error>
 #include <thread>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 namespace tetraprobe {
 namespace {
 
-constexpr size_t kLeafTets = 8;
-constexpr double kMaxChildShare = 0.8;  // each child of a split holds at most this share of the node's tets
-constexpr int kMaxDepth = 48;
-constexpr size_t kCandidateTets = 4;  // tets whose 4 faces are tried as split planes, per node
-constexpr size_t kScoreSample = 64;   // tets a candidate is scored on, per node
+constexpr int kMaxDepth = 64;
+constexpr size_t kAllFacesUpTo = 12;    // lists this short try every face of every tet as a split plane
+constexpr size_t kCandidateTets = 24;   // longer lists: the faces of this many evenly spread tets
+constexpr size_t kScoreSample = 64;     // tets a candidate is scored on, per node
+constexpr size_t kInsideCheckUpTo = 6;  // lists this short check whether one tet holds the whole region
 constexpr int64_t kMaxCellsPerTet =
     4096;  // a tet bigger than this many cells is kept to them (walk covers it)
 
@@ -47,108 +60,314 @@ uint32_t cellHash(int32_t x, int32_t y, int32_t z) {
 
 namespace {
 
+// A convex polytope: its faces' outward unit planes (a point x is inside when dot(n, x) + w <= 0 for each)
+// and polygons (convex, vertices in order around the face).
+struct Polytope {
+  std::vector<glm::dvec4> planes;
+  std::vector<std::vector<glm::dvec3>> faces;
+
+  bool empty() const { return faces.empty(); }
+  template <typename F>
+  void forEachVertex(F f) const {  // vertices shared by faces are visited once per face
+    for (const auto& face : faces)
+      for (const glm::dvec3& v : face) f(v);
+  }
+};
+
+inline double dist(const glm::dvec4& p, const glm::dvec3& x) {
+  return p.x * x.x + p.y * x.y + p.z * x.z + p.w;
+}
+
+Polytope boxPolytope(const glm::dvec3& lo, const glm::dvec3& hi) {
+  Polytope b;
+  const auto corner = [&](int i) {
+    return glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+  };
+  // Per axis a, the low face (outward -e_a) and the high face (+e_a), corners listed around each.
+  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (int f = 0; f < 6; ++f) {
+    const int a = f / 2;
+    glm::dvec4 pl(0.0);
+    pl[a] = f % 2 ? 1.0 : -1.0;
+    pl.w = f % 2 ? -hi[a] : lo[a];
+    b.planes.push_back(pl);
+    std::vector<glm::dvec3> face;
+    for (int i : quads[f]) face.push_back(corner(i));
+    b.faces.push_back(face);
+  }
+  return b;
+}
+
+// The part of `p` where dist(plane, x) <= 0 (plane: unit normal); the cut adds a face on `plane`. Vertices
+// within eps of the plane count as on it.
+Polytope clip(const Polytope& p, const glm::dvec4& plane, double eps) {
+  Polytope out;
+  std::vector<glm::dvec3> cut;
+  for (size_t i = 0; i < p.faces.size(); ++i) {
+    const std::vector<glm::dvec3>& f = p.faces[i];
+    std::vector<glm::dvec3> g;
+    for (size_t j = 0; j < f.size(); ++j) {
+      const glm::dvec3 &a = f[j], &b = f[(j + 1) % f.size()];
+      const double sa = dist(plane, a), sb = dist(plane, b);
+      if (sa <= eps) g.push_back(a);
+      if (std::abs(sa) <= eps) cut.push_back(a);
+      if ((sa < -eps && sb > eps) || (sa > eps && sb < -eps)) {
+        const glm::dvec3 x = a + (b - a) * (sa / (sa - sb));
+        g.push_back(x);
+        cut.push_back(x);
+      }
+    }
+    if (g.size() >= 3) {
+      out.planes.push_back(p.planes[i]);
+      out.faces.push_back(std::move(g));
+    }
+  }
+  if (cut.size() >= 3 && !out.faces.empty()) {
+    // The cap: the cut points in angular order around their centroid, near-duplicates merged.
+    glm::dvec3 c(0.0);
+    for (const glm::dvec3& q : cut) c += q;
+    c /= double(cut.size());
+    const glm::dvec3 n(plane);
+    const glm::dvec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(n, glm::dvec3(1, 0, 0))
+                                                            : glm::cross(n, glm::dvec3(0, 1, 0)));
+    const glm::dvec3 v = glm::cross(n, u);
+    std::vector<std::pair<double, glm::dvec3>> ring;
+    for (const glm::dvec3& q : cut) ring.emplace_back(std::atan2(glm::dot(v, q - c), glm::dot(u, q - c)), q);
+    std::sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<glm::dvec3> cap;
+    for (const auto& [angle, q] : ring)
+      if (cap.empty() || glm::length(q - cap.back()) > eps) cap.push_back(q);
+    while (cap.size() > 1 && glm::length(cap.front() - cap.back()) <= eps) cap.pop_back();
+    if (cap.size() >= 3) {
+      out.planes.push_back(plane);
+      out.faces.push_back(std::move(cap));
+    }
+  }
+  return out;
+}
+
+double volume(const Polytope& p) {
+  glm::dvec3 c(0.0);
+  size_t n = 0;
+  p.forEachVertex([&](const glm::dvec3& v) {
+    c += v;
+    ++n;
+  });
+  if (n == 0) return 0.0;
+  c /= double(n);
+  double vol = 0.0;
+  for (size_t i = 0; i < p.faces.size(); ++i) {
+    const std::vector<glm::dvec3>& f = p.faces[i];
+    glm::dvec3 area(0.0);
+    for (size_t j = 1; j + 1 < f.size(); ++j) area += glm::cross(f[j] - f[0], f[j + 1] - f[0]);
+    vol += 0.5 * glm::length(area) * std::max(0.0, -dist(p.planes[i], c)) / 3.0;
+  }
+  return vol;
+}
+
 struct CellTree {  // one cell's tree, built apart and appended in cell order (deterministic with threads)
   std::vector<BspNode> nodes;
-  std::vector<int32_t> leafTets;
-  int32_t root = 0;
+  int32_t root = kEmptyLeaf;
   int maxDepth = 0;
-  double depthSum = 0.0;
-  size_t refs = 0;
+  double depthVolume = 0.0, volume = 0.0;  // sum of leaf depth x leaf volume, and of leaf volumes
+  size_t leaves = 0, unproven = 0;
 };
 
 class TreeBuilder {
  public:
   // corners: the 4 vertex positions of every tet, contiguous (one cache line a tet instead of five).
-  TreeBuilder(const std::vector<glm::vec3>& corners, const std::vector<glm::vec3>& probes,
-              const std::vector<Tet>& tets, double margin, CellTree& out)
-      : corners_(corners), probes_(probes), tets_(tets), margin_(margin), out_(out) {}
+  TreeBuilder(const std::vector<glm::vec3>& corners, double margin, double eps, CellTree& out)
+      : corners_(corners), margin_(margin), eps_(eps), out_(out) {}
 
-  int32_t build(std::vector<int32_t>& list, int depth) {
-    if (list.size() > kLeafTets && depth < kMaxDepth) {
-      float plane[4];
-      if (choosePlane(list, plane)) {
-        std::vector<int32_t> under, over;
-        for (int32_t t : list) {
-          const int side = classify(t, plane);
-          if (side <= 0) under.push_back(t);
-          if (side >= 0) over.push_back(t);
-        }
-        // A split must shed a real share of the tets on both sides; otherwise straddlers copied into both
-        // children grow the tree faster than they shrink the leaves.
-        const double limit = kMaxChildShare * double(list.size());
-        if (double(under.size()) <= limit && double(over.size()) <= limit) {
-          std::vector<int32_t>().swap(list);
-          const auto index = int32_t(out_.nodes.size());
-          out_.nodes.push_back(BspNode{{plane[0], plane[1], plane[2], plane[3]}, {0, 0}, {0, 0}});
-          const int32_t u = build(under, depth + 1);
-          const int32_t o = build(over, depth + 1);
-          out_.nodes[size_t(index)].child[0] = u;
-          out_.nodes[size_t(index)].child[1] = o;
-          return index;
-        }
-      }
+  // The tets of `list` overlapping `region` (the root's list comes from bounding boxes).
+  void prune(const Polytope& region, std::vector<int32_t>& list) const {
+    list.erase(std::remove_if(list.begin(), list.end(), [&](int32_t t) { return !overlaps(region, t); }),
+               list.end());
+  }
+
+  // Builds the subtree of `region` over `list` (tets overlapping it); returns its node index or leaf code.
+  int32_t build(const Polytope& region, std::vector<int32_t>& list, int depth) {
+    if (list.empty()) return leaf(region, kEmptyLeaf, depth, false);
+    if (list.size() == 1) return leaf(region, ~list[0], depth, false);
+    if (list.size() <= kInsideCheckUpTo)
+      for (int32_t t : list)
+        if (holdsRegion(t, region)) return leaf(region, ~t, depth, false);
+    glm::dvec4 plane;
+    float fplane[4];
+    if (depth >= kMaxDepth || !choosePlane(region, list, plane, fplane))
+      return leaf(region, ~centroidTet(region, list), depth, true);
+    Polytope under = clip(region, plane, eps_), over = clip(region, -plane, eps_);
+    std::vector<int32_t> lo, hi;
+    for (int32_t t : list) {
+      const int side = classify(t, plane);
+      if (side < 0 || (side == 0 && overlaps(under, t))) lo.push_back(t);
+      if (side > 0 || (side == 0 && overlaps(over, t))) hi.push_back(t);
     }
-    const auto at = int32_t(out_.leafTets.size());
-    out_.leafTets.push_back(int32_t(list.size()));
-    out_.leafTets.insert(out_.leafTets.end(), list.begin(), list.end());
-    out_.maxDepth = std::max(out_.maxDepth, depth);
-    out_.depthSum += double(depth) * double(list.size());
-    out_.refs += list.size();
-    return -(at + 1);
+    std::vector<int32_t>().swap(list);
+    const auto index = int32_t(out_.nodes.size());
+    out_.nodes.push_back(BspNode{{fplane[0], fplane[1], fplane[2], fplane[3]}, {0, 0}});
+    const int32_t u = build(under, lo, depth + 1);
+    Polytope().faces.swap(under.faces);
+    const int32_t o = build(over, hi, depth + 1);
+    out_.nodes[size_t(index)].child[0] = u;
+    out_.nodes[size_t(index)].child[1] = o;
+    return index;
   }
 
  private:
-  // -1 under, +1 over, 0 both (straddling, or within the margin of the plane).
-  int classify(int32_t t, const float plane[4]) const {
-    bool under = false, over = false;
-    for (int i = 0; i < 4; ++i) {
-      const glm::dvec3 p(corners_[4 * size_t(t) + size_t(i)]);
-      const double s =
-          double(plane[0]) * p.x + double(plane[1]) * p.y + double(plane[2]) * p.z + double(plane[3]);
-      if (s < margin_) under = true;
-      if (s > -margin_) over = true;
-    }
-    return under && over ? 0 : under ? -1 : 1;
+  int32_t leaf(const Polytope& region, int32_t code, int depth, bool unproven) {
+    const double vol = volume(region);
+    out_.maxDepth = std::max(out_.maxDepth, depth);
+    out_.depthVolume += double(depth) * vol;
+    out_.volume += vol;
+    ++out_.leaves;
+    out_.unproven += unproven;
+    return code;
   }
 
-  // The best face plane of a few evenly spread tets, scored on an evenly spread sample of the list.
-  bool choosePlane(const std::vector<int32_t>& list, float best[4]) const {
-    double bestScore = 0.0;
-    const size_t n = list.size();
-    const size_t sample = std::min(n, kScoreSample);
-    for (size_t c = 0; c < kCandidateTets; ++c) {
-      const Tet& tet = tets_[size_t(list[(c * n) / kCandidateTets + n / (2 * kCandidateTets)])];
+  glm::dvec3 corner(int32_t t, int i) const { return glm::dvec3(corners_[4 * size_t(t) + size_t(i)]); }
+
+  // The outward unit plane of tet t's face opposite vertex f; false for a flat face.
+  bool facePlane(int32_t t, int f, glm::dvec4& plane) const {
+    const glm::dvec3 p0 = corner(t, (f + 1) & 3), p1 = corner(t, (f + 2) & 3), p2 = corner(t, (f + 3) & 3);
+    glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+    const double len = glm::length(n);
+    if (!(len > 0.0)) return false;
+    n /= len;
+    if (glm::dot(n, corner(t, f) - p0) > 0.0) n = -n;
+    plane = glm::dvec4(n, -glm::dot(n, p0));
+    return true;
+  }
+
+  // -1 under, +1 over (vertices within the margin of the plane count as on it), 0 straddling.
+  int classify(int32_t t, const glm::dvec4& plane) const {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int i = 0; i < 4; ++i) {
+      const double s = dist(plane, corner(t, i));
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    }
+    if (hi <= margin_ && lo < -margin_) return -1;
+    if (lo >= -margin_ && hi > margin_) return 1;
+    return 0;
+  }
+
+  // False when a face plane of the region or of the tet separates them (beyond the margin: a tet touching
+  // the region only within it does not overlap).
+  bool overlaps(const Polytope& region, int32_t t) const {
+    for (const glm::dvec4& pl : region.planes) {
+      bool outside = true;
+      for (int i = 0; i < 4 && outside; ++i) outside = dist(pl, corner(t, i)) >= -margin_;
+      if (outside) return false;
+    }
+    for (int f = 0; f < 4; ++f) {
+      glm::dvec4 pl;
+      if (!facePlane(t, f, pl)) continue;
+      bool outside = true;
+      for (const auto& face : region.faces) {
+        for (const glm::dvec3& v : face)
+          if (dist(pl, v) < -margin_) {
+            outside = false;
+            break;
+          }
+        if (!outside) break;
+      }
+      if (outside) return false;
+    }
+    return true;
+  }
+
+  // True when every vertex of the region lies inside tet t, within the margin.
+  bool holdsRegion(int32_t t, const Polytope& region) const {
+    for (int f = 0; f < 4; ++f) {
+      glm::dvec4 pl;
+      if (!facePlane(t, f, pl)) return false;
+      for (const auto& face : region.faces)
+        for (const glm::dvec3& v : face)
+          if (dist(pl, v) > margin_) return false;
+    }
+    return true;
+  }
+
+  // The tet of `list` holding the region's vertex centroid best (largest smallest distance inside its faces;
+  // ties: the first).
+  int32_t centroidTet(const Polytope& region, const std::vector<int32_t>& list) const {
+    glm::dvec3 c(0.0);
+    size_t n = 0;
+    region.forEachVertex([&](const glm::dvec3& v) {
+      c += v;
+      ++n;
+    });
+    if (n > 0) c /= double(n);
+    int32_t best = list[0];
+    double bestDepth = -std::numeric_limits<double>::infinity();
+    for (int32_t t : list) {
+      double d = std::numeric_limits<double>::infinity();
       for (int f = 0; f < 4; ++f) {
-        const glm::dvec3 p0(probes_[size_t(tet.v[(f + 1) & 3])]), p1(probes_[size_t(tet.v[(f + 2) & 3])]),
-            p2(probes_[size_t(tet.v[(f + 3) & 3])]);
-        glm::dvec3 nrm = glm::cross(p1 - p0, p2 - p0);
-        const double len = glm::length(nrm);
+        glm::dvec4 pl;
+        if (facePlane(t, f, pl)) d = std::min(d, -dist(pl, c));
+      }
+      if (d > bestDepth) {
+        bestDepth = d;
+        best = t;
+      }
+    }
+    return best;
+  }
+
+  // The best face plane cutting the region (vertices beyond the margin on both sides), scored on an evenly
+  // spread sample of the list: the square root of the balance (min/max of the tets on either side) times the
+  // fourth power of the share of tets not straddling; a tiny term for the one-sided tets lets a cut that
+  // separates nothing yet win when nothing else cuts. A straddler is copied into both children, so the
+  // straddling term dominates: against Godot-like balance x share^2 (same candidates) this makes 24 % fewer
+  // leaves on two_rooms, 21 % on Sponza and 16-25 % on random points, for a mean depth 0-10 % lower and a
+  // max depth ~40 % higher. `plane` is the float plane `fplane` in double, normalized.
+  bool choosePlane(const Polytope& region, const std::vector<int32_t>& list, glm::dvec4& plane,
+                   float fplane[4]) const {
+    double bestScore = -1.0;
+    const size_t n = list.size();
+    const bool all = n <= kAllFacesUpTo;
+    const size_t candidates = all ? n : kCandidateTets;
+    const size_t sample = std::min(n, kScoreSample);
+    for (size_t c = 0; c < candidates; ++c) {
+      const int32_t t = all ? list[c] : list[(c * n) / kCandidateTets + n / (2 * kCandidateTets)];
+      for (int f = 0; f < 4; ++f) {
+        glm::dvec4 exact;
+        if (!facePlane(t, f, exact)) continue;
+        const float fp[4] = {float(exact.x), float(exact.y), float(exact.z), float(exact.w)};
+        glm::dvec4 pl(fp[0], fp[1], fp[2], fp[3]);
+        const double len = glm::length(glm::dvec3(pl));
         if (!(len > 0.0)) continue;
-        nrm /= len;
-        const float plane[4] = {float(nrm.x), float(nrm.y), float(nrm.z), float(-glm::dot(nrm, p0))};
+        pl /= len;
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        region.forEachVertex([&](const glm::dvec3& v) {
+          const double s = dist(pl, v);
+          lo = std::min(lo, s);
+          hi = std::max(hi, s);
+        });
+        if (!(lo < -margin_ && hi > margin_)) continue;  // does not cut the region
         size_t under = 0, over = 0;
         for (size_t k = 0; k < sample; ++k) {
-          const int side = classify(list[(k * n) / sample], plane);
+          const int side = classify(list[(k * n) / sample], pl);
           under += side < 0;
           over += side > 0;
         }
-        const double lo = double(std::min(under, over)), hi = double(std::max(under, over));
-        if (hi == 0.0) continue;
-        const double kept = (lo + hi) / double(sample);
-        const double score = (lo / hi) * kept * kept;
+        const double a = double(std::min(under, over)), b = double(std::max(under, over));
+        const double kept = (a + b) / double(sample);
+        const double score = (b > 0.0 ? std::sqrt(a / b) * (kept * kept) * (kept * kept) : 0.0) + 1e-6 * kept;
         if (score > bestScore) {
           bestScore = score;
-          std::copy(plane, plane + 4, best);
+          plane = pl;
+          std::copy(fp, fp + 4, fplane);
         }
       }
     }
-    return bestScore > 0.0;
+    return bestScore >= 0.0;
   }
 
   const std::vector<glm::vec3>& corners_;
-  const std::vector<glm::vec3>& probes_;
-  const std::vector<Tet>& tets_;
-  double margin_;
+  double margin_, eps_;
   CellTree& out_;
 };
 
@@ -212,14 +431,19 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
     for (int i = 0; i < 4; ++i) corners[4 * t + size_t(i)] = probes[size_t(tets[t].v[i])];
 
   // Trees, one per cell, on worker threads taking cells in turn; appended in cell order afterwards.
+  const double eps = 1e-10 * (maxAbs + cs);  // clipping: vertices this close to a plane are on it
   std::vector<CellTree> trees(cellCount);
   std::atomic<size_t> next{0};
   auto work = [&] {
     for (size_t c; (c = next.fetch_add(1)) < cellCount;) {
       std::vector<int32_t> list;
       for (size_t i = cellStart[c]; i < cellStart[c + 1]; ++i) list.push_back(refs[i].tet);
-      TreeBuilder builder(corners, probes, tets, margin, trees[c]);
-      trees[c].root = builder.build(list, 0);
+      const int32_t* key = refs[cellStart[c]].key;
+      const glm::dvec3 lo = gmin + glm::dvec3(key[0], key[1], key[2]) * cs;
+      const Polytope box = boxPolytope(lo, lo + cs);
+      TreeBuilder builder(corners, margin, eps, trees[c]);
+      builder.prune(box, list);
+      trees[c].root = builder.build(box, list, 0);
     }
   };
   size_t n = threads > 0 ? size_t(threads) : size_t(std::max(1u, std::thread::hardware_concurrency()));
@@ -235,32 +459,37 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
   work();
   for (std::thread& t : pool) t.join();
 
-  // Hash table: a power of two at least twice the cells, grown until every probe sequence is short.
-  size_t capacity = 16;
-  while (capacity < 2 * cellCount) capacity *= 2;
+  // Cells whose tree is one empty leaf are left out (absent: the same answer, no tet).
+  std::vector<size_t> kept;
+  for (size_t c = 0; c < cellCount; ++c)
+    if (trees[c].root != kEmptyLeaf) kept.push_back(c);
   std::vector<int32_t> roots(cellCount);
-  double depthSum = 0.0;
-  for (size_t c = 0; c < cellCount; ++c) {
+  double depthVolume = 0.0, totalVolume = 0.0;
+  for (size_t c : kept) {
     CellTree& tree = trees[c];
-    const auto nodeBase = int32_t(grid.nodes.size()), leafBase = int32_t(grid.leafTets.size());
-    const auto relocate = [&](int32_t child) { return child >= 0 ? child + nodeBase : child - leafBase; };
+    const auto nodeBase = int32_t(grid.nodes.size());
+    const auto relocate = [&](int32_t child) { return child >= 0 ? child + nodeBase : child; };
     for (BspNode node : tree.nodes) {
       node.child[0] = relocate(node.child[0]);
       node.child[1] = relocate(node.child[1]);
       grid.nodes.push_back(node);
     }
-    grid.leafTets.insert(grid.leafTets.end(), tree.leafTets.begin(), tree.leafTets.end());
     roots[c] = relocate(tree.root);
     grid.maxDepth = std::max(grid.maxDepth, tree.maxDepth);
-    depthSum += tree.depthSum;
-    grid.leafReferences += tree.refs;
+    depthVolume += tree.depthVolume;
+    totalVolume += tree.volume;
+    grid.leaves += tree.leaves;
+    grid.unprovenLeaves += tree.unproven;
     CellTree().nodes.swap(tree.nodes);
   }
-  grid.meanDepth = grid.leafReferences > 0 ? depthSum / double(grid.leafReferences) : 0.0;
+  grid.meanDepth = totalVolume > 0.0 ? depthVolume / totalVolume : 0.0;
+  // Hash table: a power of two at least twice the cells, grown until every probe sequence is short.
+  size_t capacity = 16;
+  while (capacity < 2 * kept.size()) capacity *= 2;
   for (;;) {
     grid.slots.assign(capacity, CellSlot{{INT32_MIN, 0, 0}, 0});
     grid.maxProbe = 0;
-    for (size_t c = 0; c < cellCount; ++c) {
+    for (size_t c : kept) {
       const int32_t* key = refs[cellStart[c]].key;
       size_t h = size_t(cellHash(key[0], key[1], key[2])) & (capacity - 1);
       uint32_t probe = 1;
@@ -274,21 +503,22 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
     if (grid.maxProbe <= kMaxCellProbe || capacity >= (size_t(1) << 30)) break;
     capacity *= 2;
   }
+  if (kept.empty()) {  // no occupied cell: no grid at all
+    grid.slots.clear();
+    grid.maxProbe = 0;
+  }
   return grid;
 }
 
-const int32_t* cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int32_t* count, int* depth) {
-  *count = 0;
+int32_t cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int* depth) {
   if (depth) *depth = 0;
-  if (grid.slots.empty()) return nullptr;
+  if (grid.slots.empty()) return -1;
   int32_t key[3], node = 0;
-  if (!cellGridKey(grid, x, key) || !cellGridFind(grid, key, cellGridSlot(grid, key), &node)) return nullptr;
+  if (!cellGridKey(grid, x, key) || !cellGridFind(grid, key, cellGridSlot(grid, key), &node)) return -1;
   int d = 0;
   for (; node >= 0; ++d) node = cellGridChild(grid.nodes[size_t(node)], x);
   if (depth) *depth = d;
-  const int32_t* leaf = grid.leafTets.data() + size_t(-(node + 1));
-  *count = leaf[0];
-  return leaf + 1;
+  return bspLeafTet(node);
 }
 
 }  // namespace tetraprobe

@@ -45,12 +45,14 @@ constexpr uint32_t tag(const char (&s)[5]) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
-                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGRD"),
+                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
                    kTagOcclusion = tag("OCCL");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
-constexpr uint64_t kCellGridHeaderBytes = 64;  // min, cellSize, maxProbe, maxDepth, meanDepth, refs, 3 counts
-constexpr uint64_t kSlotBytes = 16, kNodeBytes = 32;
+// CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
+// retired CGRD section, leaves of several tets, is an unknown optional tag now: skipped, the grid rebuilt.)
+constexpr uint64_t kCellGridHeaderBytes = 64;
+constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24;
 
 // CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, as zlib's crc32()).
 constexpr std::array<uint32_t, 256> makeCrcTable() {
@@ -233,33 +235,20 @@ LevelResult validateLevel(const Level& level) {
     }
   }
   const CellGrid& g = level.cellGrid;
-  if (!g.slots.empty() || !g.nodes.empty() || !g.leafTets.empty()) {
+  if (!g.slots.empty() || !g.nodes.empty()) {
     const size_t slots = g.slots.size();
     if (slots == 0 || (slots & (slots - 1)) != 0 || slots > kMaxCount || g.nodes.size() > kMaxCount ||
-        g.leafTets.size() > kMaxCount)
+        g.unprovenLeaves > g.leaves)
       return corrupt("cell grid: " + std::to_string(slots) +
                      " slots (a power of two) or counts out of range");
     if (!finite3(g.min) || !(g.cellSize > 0.0f) || !std::isfinite(g.cellSize) || g.maxProbe < 1 ||
         g.maxProbe > kMaxCellProbe)
       return corrupt("cell grid: bad origin, cell size or probe bound");
-    // Leaf lists parsed once, in order: each start is a count followed by that many tets in range.
-    std::vector<uint8_t> leafStart(g.leafTets.size(), 0);
-    for (size_t at = 0; at < g.leafTets.size();) {
-      const int64_t count = g.leafTets[at];
-      if (count < 0 || int64_t(at) + count >= int64_t(g.leafTets.size()))
-        return corrupt("cell grid: leaf at " + std::to_string(at) + " overruns the leaf array");
-      for (int64_t i = 1; i <= count; ++i)
-        if (g.leafTets[at + size_t(i)] < 0 || g.leafTets[at + size_t(i)] >= tetCount)
-          return corrupt("cell grid: leaf at " + std::to_string(at) + " names a tet out of range");
-      leafStart[at] = 1;
-      at += size_t(count) + 1;
-    }
     const auto nodeCount = int64_t(g.nodes.size());
-    // A child is a later node (so every descent ends) or the start of a leaf.
+    // A child is a later node (so every descent ends), a tet in range, or the empty leaf.
     const auto validChild = [&](int32_t c, int64_t parent) {
       if (c >= 0) return int64_t(c) > parent && int64_t(c) < nodeCount;
-      const int64_t at = -(int64_t(c) + 1);
-      return at < int64_t(leafStart.size()) && leafStart[size_t(at)] != 0;
+      return c == kEmptyLeaf || int64_t(~c) < tetCount;
     };
     for (size_t s = 0; s < slots; ++s)
       if (g.slots[s].key[0] != INT32_MIN && !validChild(g.slots[s].root, -1))
@@ -268,8 +257,7 @@ LevelResult validateLevel(const Level& level) {
       const BspNode& node = g.nodes[size_t(n)];
       for (float x : node.plane)
         if (!std::isfinite(x)) return corrupt("cell grid: node " + std::to_string(n) + " plane not finite");
-      if (node.pad[0] != 0 || node.pad[1] != 0 || !validChild(node.child[0], n) ||
-          !validChild(node.child[1], n))
+      if (!validChild(node.child[0], n) || !validChild(node.child[1], n))
         return corrupt("cell grid: node " + std::to_string(n) + " child out of range");
     }
   }
@@ -371,10 +359,10 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     s.u32(g.maxProbe);
     s.i32(int32_t(g.maxDepth));
     s.f64(g.meanDepth);
-    s.u64(g.leafReferences);
+    s.u64(g.leaves);
+    s.u64(g.unprovenLeaves);
     s.u64(g.slots.size());
     s.u64(g.nodes.size());
-    s.u64(g.leafTets.size());
     for (const CellSlot& slot : g.slots) {
       for (int32_t k : slot.key) s.i32(k);
       s.i32(slot.root);
@@ -382,9 +370,7 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     for (const BspNode& node : g.nodes) {
       for (float x : node.plane) s.f32(x);
       for (int32_t c : node.child) s.i32(c);
-      for (int32_t pad : node.pad) s.i32(pad);
     }
-    for (int32_t t : g.leafTets) s.i32(t);
   }
 
   if (!level.occlusion.empty()) {  // an empty occlusion writes no section: such files stay byte-identical
@@ -544,17 +530,15 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     return fail(LevelStatus::kCorrupt,
                 name + "outer cell section of " + std::to_string(outer.size) + " bytes is not whole records");
 
-  uint64_t gridSlots = 0, gridNodes = 0, gridLeafInts = 0;
+  uint64_t gridSlots = 0, gridNodes = 0;
   if (cellGrid.present) {
     if (cellGrid.size < kCellGridHeaderBytes)
       return fail(LevelStatus::kCorrupt, name + "cell grid section shorter than its header");
-    Reader counts(data + cellGrid.offset + 40);
+    Reader counts(data + cellGrid.offset + 48);
     gridSlots = counts.u64();
     gridNodes = counts.u64();
-    gridLeafInts = counts.u64();
-    if (gridSlots > kMaxCount || gridNodes > kMaxCount || gridLeafInts > kMaxCount ||
-        cellGrid.size !=
-            kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * kNodeBytes + gridLeafInts * 4)
+    if (gridSlots > kMaxCount || gridNodes > kMaxCount ||
+        cellGrid.size != kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * kNodeBytes)
       return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
   }
 
@@ -622,8 +606,9 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     g.maxProbe = body.u32();
     g.maxDepth = body.i32();
     g.meanDepth = body.f64();
-    g.leafReferences = size_t(body.u64());
-    body.skip(24);  // the counts, read above
+    g.leaves = size_t(body.u64());
+    g.unprovenLeaves = size_t(body.u64());
+    body.skip(16);  // the counts, read above
     g.slots.resize(size_t(gridSlots));
     for (CellSlot& slot : g.slots) {
       for (int32_t& k : slot.key) k = body.i32();
@@ -633,10 +618,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     for (BspNode& node : g.nodes) {
       for (float& x : node.plane) x = body.f32();
       for (int32_t& c : node.child) c = body.i32();
-      for (int32_t& pad : node.pad) pad = body.i32();
     }
-    g.leafTets.resize(size_t(gridLeafInts));
-    for (int32_t& t : g.leafTets) t = body.i32();
   }
 
   if (occlusion.present) {

@@ -657,12 +657,11 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   return gridLocate(x);
 }
 
-// The cell grid's leaf names the walk's start; the walk decides the answer (so it does not depend on how the
+// The cell grid's leaf names the tet holding the leaf's region; the walk from it decides the answer (it
+// accepts at once unless the point is within rounding of a face, so the answer does not depend on how the
 // tree was split), stepping to the neighbour or out to the outer cells as needed.
 Location ProbeQuery::gridLocate(const glm::dvec3& x) const {
-  int32_t count = 0;
-  const int32_t* leaf = cellGridLeaf(cellGrid(), x, &count);
-  int32_t cur = startTet(x, leaf, count);
+  int32_t cur = startTet(x, cellGridLeaf(cellGrid(), x));
   double w[4];
   for (int s = 0; s < kPlainSteps; ++s) {
     const int32_t next = plainStep(level_.tets, x, cur, w);
@@ -672,12 +671,10 @@ Location ProbeQuery::gridLocate(const glm::dvec3& x) const {
   return walkFrom(x, cur, -1);
 }
 
-// Leaves hold the tets overlapping a region about one tet across, in index (Morton) order: the middle one is
-// near the region's centre, and the walk from it takes a step or two. Checking every leaf tet would cost more
-// than those steps. No leaf (or an empty one): the coarse start grid's tet.
-int32_t ProbeQuery::startTet(const glm::dvec3& x, const int32_t* leaf, int32_t count) const {
-  const int32_t start = count > 0 ? leaf[count / 2] : -1;
-  return start >= 0 ? start : grid_.startTet[size_t(gridCell(grid_, x))];
+// The leaf's tet, or where there is none (an absent cell or an empty leaf: outside the tets, up to rounding)
+// the coarse start grid's tet.
+int32_t ProbeQuery::startTet(const glm::dvec3& x, int32_t leafTet) const {
+  return leafTet >= 0 ? leafTet : grid_.startTet[size_t(gridCell(grid_, x))];
 }
 
 Location ProbeQuery::walkLocate(const glm::dvec3& world) const {
@@ -714,8 +711,8 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
   return blendIrradiance(level_.sh, t, weights, normal);
 }
 
-// Random queries on a large level are bound by memory latency: the hash slot, about a dozen BSP nodes, a tet
-// or three and four SH records, each a dependent cache miss. A group of kBatchGroup queries therefore goes
+// Random queries on a large level are bound by memory latency: the hash slot, a dozen or more BSP nodes, the
+// leaf's tet and four SH records, each a dependent cache miss. A group of kBatchGroup queries therefore goes
 // through locate()'s stages in lock step, each stage prefetching what the next needs for every query of the
 // group, so their misses overlap (group prefetching, Chen et al., "Improving hash join performance through
 // prefetching", ICDE 2004). Coherent queries (pixel order) first try the previous query's tet when they lie
@@ -796,8 +793,8 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       if (code[k] >= 0) {
         __builtin_prefetch(grid.nodes.data() + code[k]);
         descending = true;
-      } else {
-        __builtin_prefetch(grid.leafTets.data() - (code[k] + 1));
+      } else if (bspLeafTet(code[k]) >= 0) {
+        prefetchTet(tets, bspLeafTet(code[k]));
       }
     }
     while (descending) {
@@ -808,22 +805,15 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
         if (code[k] >= 0) {
           __builtin_prefetch(grid.nodes.data() + code[k]);
           descending = true;
-        } else {
-          __builtin_prefetch(grid.leafTets.data() - (code[k] + 1));
+        } else if (bspLeafTet(code[k]) >= 0) {
+          prefetchTet(tets, bspLeafTet(code[k]));
         }
       }
     }
-    // The leaf's start tet, then plain walk steps in lock step.
+    // The leaf's tet, then plain walk steps in lock step.
     for (size_t k = 0; k < n; ++k) {
       if (done[k]) continue;
-      const int32_t* leaf = nullptr;
-      int32_t count = 0;
-      if (haveKey[k]) {
-        leaf = grid.leafTets.data() + size_t(-(code[k] + 1));
-        count = leaf[0];
-        ++leaf;
-      }
-      cur[k] = startTet(x[k], leaf, count);
+      cur[k] = startTet(x[k], haveKey[k] ? bspLeafTet(code[k]) : -1);
       prefetchTet(tets, cur[k]);
       code[k] = 0;  // now: plain steps still to take (0 = taking them)
     }

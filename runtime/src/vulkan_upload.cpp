@@ -116,17 +116,8 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
 
   // The cell grid: every root, child and leaf entry the shader follows, in range.
   {
-    const auto nodeCount = int64_t(cellGrid.nodes.size()), leafInts = int64_t(cellGrid.leafTets.size());
-    const auto validLeaf = [&](int32_t code) {
-      const int64_t at = -(int64_t(code) + 1);
-      if (at < 0 || at >= leafInts) return false;
-      const int64_t count = cellGrid.leafTets[size_t(at)];
-      if (count < 0 || at + count >= leafInts) return false;
-      for (int64_t i = 1; i <= count; ++i)
-        if (cellGrid.leafTets[size_t(at + i)] < 0 || cellGrid.leafTets[size_t(at + i)] >= tetCount)
-          return false;
-      return true;
-    };
+    const auto nodeCount = int64_t(cellGrid.nodes.size());
+    const auto validLeaf = [&](int32_t code) { return code == kEmptyLeaf || int64_t(~code) < tetCount; };
     const auto validChild = [&](int32_t c) { return c >= 0 ? c < nodeCount : validLeaf(c); };
     bool ok = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
     for (const CellSlot& s : cellGrid.slots) ok = ok && (s.key[0] == INT32_MIN || validChild(s.root));
@@ -175,11 +166,9 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   cellHeader.slotMask = cellGrid.slots.empty() ? 0u : uint32_t(cellGrid.slots.size() - 1);
   cellHeader.maxProbe = cellGrid.slots.empty() ? 0u : cellGrid.maxProbe;
   cellHeader.nodeOffset = int32_t(4 * cellGrid.slots.size());
-  cellHeader.leafOffset = int32_t(4 * cellGrid.slots.size() + 8 * cellGrid.nodes.size());
   appendBytes(data[kGpuBindingCells], &cellHeader, 1);
   appendBytes(data[kGpuBindingCells], cellGrid.slots.data(), cellGrid.slots.size());
   appendBytes(data[kGpuBindingCells], cellGrid.nodes.data(), cellGrid.nodes.size());
-  appendBytes(data[kGpuBindingCells], cellGrid.leafTets.data(), cellGrid.leafTets.size());
 
   const LevelOcclusion& occ = level.occlusion;
   GpuOcclusionHeader occHeader{};

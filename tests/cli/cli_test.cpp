@@ -193,6 +193,13 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   EXPECT_GT(j.at("bytes").at("total").get<int64_t>(), 0);
   for (const char* stage : {"load", "place", "tetrahedralize", "bake", "write", "total"})
     EXPECT_TRUE(j.at("timings_s").contains(stage)) << stage;
+  // Point location: a binary tree per cell has one node fewer than leaves; one leaf per tet at least.
+  const auto& loc = j.at("locate");
+  EXPECT_EQ(loc.at("leaves").get<int64_t>(),
+            loc.at("bsp_nodes").get<int64_t>() + loc.at("cells").get<int64_t>());
+  EXPECT_GE(loc.at("leaves").get<int64_t>(), j.at("tets").at("count").get<int64_t>());
+  EXPECT_EQ(loc.at("bytes").get<int64_t>(),
+            16 * loc.at("hash_slots").get<int64_t>() + 24 * loc.at("bsp_nodes").get<int64_t>());
 
   const CliRun insp = run("inspect --json " + path("a.tpb").string());
   ASSERT_EQ(insp.code, 0) << insp.err;

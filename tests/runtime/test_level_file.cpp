@@ -84,7 +84,7 @@ void fixPayloadCrc(std::vector<char>& b) {
 
 bool emptyLevel(const Level& l) {
   return l.probes.empty() && l.sh.empty() && l.tets.empty() && l.generator.empty() && l.outerCells.empty() &&
-         l.cellGrid.slots.empty() && l.cellGrid.nodes.empty() && l.cellGrid.leafTets.empty();
+         l.cellGrid.slots.empty() && l.cellGrid.nodes.empty();
 }
 
 uint32_t getU32(const std::vector<char>& b, size_t at) {
@@ -166,23 +166,22 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(gb.maxProbe, g.maxProbe);
   EXPECT_EQ(gb.maxDepth, g.maxDepth);
   EXPECT_EQ(gb.meanDepth, g.meanDepth);
-  EXPECT_EQ(gb.leafReferences, g.leafReferences);
+  EXPECT_EQ(gb.leaves, g.leaves);
+  EXPECT_EQ(gb.unprovenLeaves, g.unprovenLeaves);
   ASSERT_EQ(gb.slots.size(), g.slots.size());
   ASSERT_EQ(gb.nodes.size(), g.nodes.size());
   EXPECT_EQ(std::memcmp(gb.slots.data(), g.slots.data(), g.slots.size() * sizeof(CellSlot)), 0);
   EXPECT_EQ(std::memcmp(gb.nodes.data(), g.nodes.data(), g.nodes.size() * sizeof(BspNode)), 0);
-  EXPECT_EQ(gb.leafTets, g.leafTets);
   ASSERT_TRUE(saveLevel(dir.file("b.tpb"), level));
   ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
   // The documented size: 80-byte header, six 24-byte table entries and the table's CRC, 120 bytes per
-  // probe, 80 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 32 per
-  // node, 4 per leaf int), a 4-byte CRC.
-  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 6 * 24 + 4 + 120 * level.probes.size() +
-                                                   80 * level.tets.size() + level.generator.size() +
-                                                   80 * level.outerCells.size() + 64 + 16 * g.slots.size() +
-                                                   32 * g.nodes.size() + 4 * g.leafTets.size() + 4);
+  // probe, 80 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 24 per
+  // node), a 4-byte CRC.
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
+            80 + 6 * 24 + 4 + 120 * level.probes.size() + 80 * level.tets.size() + level.generator.size() +
+                80 * level.outerCells.size() + 64 + 16 * g.slots.size() + 24 * g.nodes.size() + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -228,9 +227,9 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
   const size_t tets = sectionOffset(full, "TETS"), outer = sectionOffset(full, "OUTC");
-  const size_t grid = sectionOffset(full, "CGRD"), slots = grid + 64,
-               nodes = slots + 16 * level.cellGrid.slots.size(),
-               leaves = nodes + 32 * level.cellGrid.nodes.size();
+  const size_t grid = sectionOffset(full, "CGR2"), slots = grid + 64,
+               nodes = slots + 16 * level.cellGrid.slots.size();
+  ASSERT_FALSE(level.cellGrid.nodes.empty());
   size_t usedSlot = 0;
   while (level.cellGrid.slots[usedSlot].key[0] == INT32_MIN) ++usedSlot;
   const struct {
@@ -247,10 +246,10 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
                {outer + 32, 0x7FC00000u, "not a unit vector"},                   // outer cell 0's normal: NaN
                {outer + 76, 1u, "padding"},
                {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
-               {slots + 16 * usedSlot + 12, uint32_t(-int32_t(level.cellGrid.leafTets.size()) - 3),
-                "root out of range"},
-               {leaves, uint32_t(level.cellGrid.leafTets.size()), "overruns"},
-               {leaves + 4, uint32_t(level.tets.size()), "tet out of range"},
+               {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
+               {nodes + 16, 0u, "child out of range"},  // node 0's under child: itself, not a later node
+               {nodes + 20, uint32_t(~int32_t(level.tets.size() + 2)), "child out of range"},
+               {nodes + 4, 0x7F800000u, "not finite"},
                {grid + 12, 0x7FC00000u, "cell size"}};
   for (const auto& c : cases) {
     std::vector<char> b = full;

@@ -188,6 +188,15 @@ int cmdBake(int argc, char** argv) {
         stats.occlusion.agreement);
   else
     std::printf("  occl    none\n");
+  const CellGrid& grid = level.cellGrid;
+  const size_t gridBytes = grid.slots.size() * sizeof(CellSlot) + grid.nodes.size() * sizeof(BspNode);
+  size_t gridCells = 0;
+  for (const CellSlot& s : grid.slots) gridCells += s.key[0] != INT32_MIN;
+  std::printf(
+      "  locate  %zu cells of %g m, BSP %zu nodes, %zu leaves (one tet each), depth max %d mean %.1f; "
+      "%zu bytes (%.1f per tet)\n",
+      gridCells, double(grid.cellSize), grid.nodes.size(), grid.leaves, grid.maxDepth, grid.meanDepth,
+      gridBytes, level.tets.empty() ? 0.0 : double(gridBytes) / double(level.tets.size()));
   std::printf("  bytes   %llu (probes %llu, SH %llu, tets %llu)\n", (unsigned long long)fileBytes,
               (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
   std::printf("  time   ");
@@ -255,6 +264,15 @@ int cmdBake(int argc, char** argv) {
                       {"tets_with_geometry", stats.occlusion.tetsWithGeometry},
                       {"bytes", level.occlusion.bytes()},
                       {"agreement", stats.occlusion.agreement}};
+    j["locate"] = {{"cell_size_m", grid.cellSize},
+                   {"cells", gridCells},
+                   {"hash_slots", grid.slots.size()},
+                   {"bsp_nodes", grid.nodes.size()},
+                   {"leaves", grid.leaves},
+                   {"unproven_leaves", grid.unprovenLeaves},
+                   {"max_depth", grid.maxDepth},
+                   {"mean_depth", grid.meanDepth},
+                   {"bytes", gridBytes}};
     nlohmann::json timings = nlohmann::json::object();
     for (const auto& [stage, s] : stats.timings) timings[stage] = s;
     timings["total"] = total;

@@ -1,8 +1,9 @@
 // The point-location accelerator of Valient (GDC 2014, Killzone Shadow Fall): a sparse grid of cubic cells
 // (16 m by default) found through a hash table, and in each occupied cell a BSP tree over the tets that
-// overlap it. Descending the tree names a list of tets (a leaf) that holds every tet overlapping the leaf's
-// region (LeafHoldsContainingTet); ProbeQuery::locate starts the ordinary walk (query.cpp) from one of them,
-// so the answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
+// overlap it, descended to a leaf naming one tet: the tet holding the leaf's whole region (built with exact
+// region tracking, cell_grid.cpp). ProbeQuery::locate takes that tet and lets the ordinary walk (query.cpp)
+// confirm it (it accepts at once, except within rounding of a face, where exact weights decide), so the
+// answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
 #pragma once
 
 #include <climits>
@@ -17,15 +18,22 @@ namespace tetraprobe {
 
 struct Tet;  // level.h (which holds a CellGrid)
 
-// One BSP node, flat array (32 bytes). A point x (local frame) goes to child[1] when
-// dot(plane.xyz, x) + plane.w >= 0, else to child[0]. A child >= 0 is a node index; a child < 0 is the leaf
-// at leafTets[-(child + 1)]: a count, then that many tet indices.
+// One BSP node, flat array (24 bytes). A point x (local frame) goes to child[1] when
+// dot(plane.xyz, x) + plane.w >= 0, else to child[0]. A child >= 0 is a node index (always larger than its
+// parent's); a child < 0 is a leaf: the tet ~child (= -(child + 1)), or kEmptyLeaf (no tet: the region lies
+// outside every tet).
 struct BspNode {
   float plane[4];
   int32_t child[2];
-  int32_t pad[2];
 };
-static_assert(sizeof(BspNode) == 32, "BspNode is 32 bytes");
+static_assert(sizeof(BspNode) == 24, "BspNode is 24 bytes (6 ints on the GPU)");
+
+inline constexpr int32_t kEmptyLeaf = INT32_MIN;
+
+// The tet a leaf code (< 0) names, or -1 for kEmptyLeaf.
+inline int32_t bspLeafTet(int32_t code) {
+  return code == kEmptyLeaf ? -1 : ~code;
+}
 
 // One slot of the cell hash table (16 bytes). key = integer cell coordinates; root = the cell's tree (node
 // index >= 0, or a leaf code < 0 as in BspNode::child). Empty slots have key[0] == INT32_MIN.
@@ -44,12 +52,14 @@ struct CellGrid {
   uint32_t maxProbe = 0;
   std::vector<CellSlot> slots;
   std::vector<BspNode> nodes;
-  std::vector<int32_t> leafTets;
-  // Statistics of the build: deepest leaf, mean leaf depth weighted by the leaf's tets, and tet references
-  // held by leaves (a tet straddling split planes or cells is held by several).
+  // Statistics of the build: the deepest leaf; the mean leaf depth weighted by the leaf regions' volumes
+  // (the expected descent of a uniformly random point in the occupied cells); leaves; and the leaves whose
+  // tet was chosen without proof that it holds the whole region (the depth bound or no cutting face plane
+  // was reached first; the walk from such a tet still gives the right answer, a step or two later).
   int maxDepth = 0;
   double meanDepth = 0.0;
-  size_t leafReferences = 0;
+  size_t leaves = 0;
+  size_t unprovenLeaves = 0;
 };
 
 inline constexpr uint32_t kMaxCellProbe = 8;
@@ -59,21 +69,23 @@ inline constexpr uint32_t kMaxCellProbe = 8;
 uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 
 // Buckets `tets` (over `probes`, local frame) into cells of `cellSize` metres by their bounding boxes and
-// builds each cell's BSP: split planes are tet face planes, scored as Godot's LightmapGI does
-// (min/max balance times the squared fraction of tets not straddling); tets within a rounding margin of a
-// plane go to both sides; a leaf holds at most 8 tets (more only where no face plane separates them, or at
-// depth 48). Deterministic for any `threads` (0 = all cores). Allocates the result.
+// builds each cell's BSP: split planes are tet face planes cutting the node's region, scored on balance
+// (min/max of the tets on either side, as Godot's LightmapGI) and, more strongly, on the share of tets not
+// straddling (straddlers are copied into both children); each node keeps the
+// tets that overlap its region (a convex polytope, clipped at every split; a tet touching it only within a
+// rounding margin is dropped), and a node with one tet left, or whose region lies inside one tet, is a leaf
+// naming it. Deterministic for any `threads` (0 = all cores). Allocates the result.
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets,
                        float cellSize = 16.0f, int threads = 0);
 
-// The leaf holding local point x: a pointer to its tet indices and their count (0 when x's cell is absent or
-// its leaf is empty: x is then outside every tet overlapping the grid). `depth` (optional) gets the number
-// of nodes descended.
-const int32_t* cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int32_t* count, int* depth = nullptr);
+// The tet named by the leaf holding local point x, or -1 (x's cell is absent or its leaf empty: x is then
+// outside every tet overlapping the grid, up to rounding). `depth` (optional) gets the nodes descended.
+int32_t cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int* depth = nullptr);
 
 // The steps of cellGridLeaf one by one, for callers interleaving many queries (ProbeQuery::irradianceBatch
 // prefetches each step's memory for a group of queries before taking it). cellGridLeaf is exactly
-// cellGridKey, then cellGridFind from cellGridSlot, then cellGridChild until the code is a leaf (< 0).
+// cellGridKey, then cellGridFind from cellGridSlot, then cellGridChild until the code is a leaf (< 0), then
+// bspLeafTet.
 
 // x's cell coordinates; false when x is beyond any representable cell (or NaN): no cell, no leaf.
 inline bool cellGridKey(const CellGrid& grid, const glm::dvec3& x, int32_t key[3]) {

@@ -78,23 +78,22 @@ inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
 
 // Header of the TetraprobeCells buffer (32 bytes): the sparse cell grid + BSP of cell_grid.h. The int32
 // data[] that follows at offset 32 holds the hash slots (CellSlot, 4 ints each) from index 0, the BSP nodes
-// (BspNode, 8 ints each, planes as float bits) from nodeOffset and the leaf lists from leafOffset. A node
-// child < 0 names the leaf at data[leafOffset - (child + 1)]: a count, then that many tets.
+// (BspNode, 6 ints each: plane as float bits, child under, child over) from nodeOffset. A root or child < 0
+// is a leaf: the tet ~child, or none for kEmptyLeaf (INT_MIN).
 struct GpuCellGridHeader {
   float min[3];        // vec3 tetraprobeCellMin, local frame, metres
   float cellSize;      // float tetraprobeCellSize, metres
   uint32_t slotMask;   // uint tetraprobeCellSlotMask: slots - 1
   uint32_t maxProbe;   // uint tetraprobeCellMaxProbe: 0 = no grid (the walk starts from the start grid)
   int32_t nodeOffset;  // int tetraprobeCellNodeOffset
-  int32_t leafOffset;  // int tetraprobeCellLeafOffset
+  int32_t reserved;    // 0
 };
 static_assert(std::is_standard_layout_v<GpuCellGridHeader>);
 static_assert(sizeof(GpuCellGridHeader) == 32 && offsetof(GpuCellGridHeader, cellSize) == 12 &&
-                  offsetof(GpuCellGridHeader, slotMask) == 16 &&
-                  offsetof(GpuCellGridHeader, leafOffset) == 28,
+                  offsetof(GpuCellGridHeader, slotMask) == 16 && offsetof(GpuCellGridHeader, reserved) == 28,
               "TetraprobeCells header: 32 bytes, data[] at offset 32");
-static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 8 * sizeof(int32_t),
-              "TetraprobeCells: 4 ints a slot, 8 ints a node");
+static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 6 * sizeof(int32_t),
+              "TetraprobeCells: 4 ints a slot, 6 ints a node");
 
 // TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
 // after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes

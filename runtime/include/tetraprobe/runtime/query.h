@@ -53,9 +53,10 @@ class ProbeQuery {
   // ~1e-4 on slivers) the walk decides with weights computed in double from the four probe positions, so the
   // tet named holds the point with exact weights within [-1e-6, 1 + 1e-6] and those are the weights returned.
   //
-  // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet comes from the
-  // sparse cell grid's BSP (cell_grid.h): the middle tet of the point's leaf, a step or two from the answer;
-  // a point whose cell is absent starts from the coarse start grid and ends in the outer cells.
+  // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet is the one the
+  // sparse cell grid's BSP leaf names (cell_grid.h), which holds the point but within rounding of its faces;
+  // a point whose cell is absent, or whose leaf is empty, starts from the coarse start grid and ends in the
+  // outer cells.
   Location locate(const glm::dvec3& world, int32_t hint = -1) const;
 
   // The same answer found the previous way, by a walk from the coarse start grid's tet (no cell grid): for
@@ -102,7 +103,7 @@ class ProbeQuery {
   Location outerLocate(const glm::dvec3& x, int32_t startCell) const;
   Location walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const;
   Location outerScan(const glm::dvec3& x, const Location& fallback) const;
-  int32_t startTet(const glm::dvec3& x, const int32_t* leaf, int32_t count) const;
+  int32_t startTet(const glm::dvec3& x, int32_t leafTet) const;
   glm::vec3 shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal) const;
   void batchRange(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t begin,
                   size_t end) const;
