@@ -665,7 +665,11 @@ Location ProbeQuery::gridLocate(const glm::dvec3& x) const {
   double w[4];
   for (int s = 0; s < kPlainSteps; ++s) {
     const int32_t next = plainStep(level_.tets, x, cur, w);
-    if (next < 0) break;
+    if (next < 0) {
+      // Clearly inside (the leaf's tet, usually): the walk would accept these weights at once.
+      if (clearlyInside(level_.tets[size_t(cur)], x, w[minIndex(w)])) return finish(cur, w, true);
+      break;
+    }
     cur = next;
   }
   return walkFrom(x, cur, -1);
@@ -825,6 +829,12 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
         const int32_t next = plainStep(tets, x[k], cur[k], w);
         if (next < 0) {
           code[k] = 1;
+          // Clearly inside (the leaf's tet, usually): the walk would accept these weights at once.
+          if (clearlyInside(tets[size_t(cur[k])], x[k], w[minIndex(w)])) {
+            loc[k] = finish(cur[k], w, true);
+            prefetchSh(level_, tets[size_t(cur[k])]);
+            code[k] = 2;
+          }
           continue;
         }
         cur[k] = next;
@@ -835,7 +845,7 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
     }
     // The full walk from there (usually accepting at once), then the SH records.
     for (size_t k = 0; k < n; ++k) {
-      if (done[k]) continue;
+      if (done[k] || code[k] == 2) continue;
       loc[k] = walkFrom(x[k], cur[k], -1);
       if (loc[k].tet >= 0) prefetchSh(level_, tets[size_t(loc[k].tet)]);
     }
