@@ -37,6 +37,10 @@ int cmdInspect(int argc, char** argv) {
   if (level.content & kContentDirectPunctual) content += "direct-punctual ";
   if (!content.empty()) content.pop_back();
   const uint64_t bytes = std::filesystem::file_size(path);
+  const CellGrid& grid = level.cellGrid;
+  size_t cells = 0;
+  for (const CellSlot& s : grid.slots) cells += s.key[0] != INT32_MIN;
+  const size_t gridBytes = grid.slots.size() * sizeof(CellSlot) + grid.nodes.size() * sizeof(BspNode);
 
   if (args.has("--json")) {
     nlohmann::json j = {{"path", path},
@@ -47,7 +51,18 @@ int cmdInspect(int argc, char** argv) {
                         {"origin", {level.origin.x, level.origin.y, level.origin.z}},
                         {"bounds", {{"min", {wlo.x, wlo.y, wlo.z}}, {"max", {whi.x, whi.y, whi.z}}}},
                         {"probes", {{"count", level.probes.size()}}},
-                        {"tets", {{"count", level.tets.size()}, {"hull_faces", hull}}}};
+                        {"tets", {{"count", level.tets.size()}, {"hull_faces", hull}}},
+                        {"outer_cells", level.outerCells.size()},
+                        {"locate",
+                         {{"stored", !grid.slots.empty()},
+                          {"cell_size_m", grid.cellSize},
+                          {"cells", cells},
+                          {"bsp_nodes", grid.nodes.size()},
+                          {"leaves", grid.leaves},
+                          {"max_depth", grid.maxDepth},
+                          {"mean_depth", grid.meanDepth},
+                          {"bytes", gridBytes}}},
+                        {"occlusion_bytes", level.occlusion.bytes()}};
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
@@ -60,7 +75,16 @@ int cmdInspect(int argc, char** argv) {
   std::printf("  bounds     [%.4g %.4g %.4g] .. [%.4g %.4g %.4g]\n", wlo.x, wlo.y, wlo.z, whi.x, whi.y,
               whi.z);
   std::printf("  probes     %zu\n", level.probes.size());
-  std::printf("  tets       %zu (%d hull faces)\n", level.tets.size(), hull);
+  std::printf("  tets       %zu (%d hull faces), %zu outer cells\n", level.tets.size(), hull,
+              level.outerCells.size());
+  if (grid.slots.empty())
+    std::printf("  locate     no cell grid stored (built on load)\n");
+  else
+    std::printf(
+        "  locate     %zu cells of %g m, BSP %zu nodes, %zu leaves, depth max %d mean %.1f, %zu bytes\n",
+        cells, double(grid.cellSize), grid.nodes.size(), grid.leaves, grid.maxDepth, grid.meanDepth,
+        gridBytes);
+  std::printf("  occlusion  %zu bytes\n", level.occlusion.bytes());
   return 0;
 }
 
