@@ -60,17 +60,28 @@ uint32_t cellHash(int32_t x, int32_t y, int32_t z) {
 
 namespace {
 
-// A convex polytope: its faces' outward unit planes (a point x is inside when dot(n, x) + w <= 0 for each)
-// and polygons (convex, vertices in order around the face).
+// A convex polytope: its faces' outward unit planes (a point x is inside when dot(n, x) + w <= 0 for each),
+// polygons (convex, vertices in order around the face) and distinct vertices.
 struct Polytope {
   std::vector<glm::dvec4> planes;
   std::vector<std::vector<glm::dvec3>> faces;
+  std::vector<glm::dvec3> verts;
 
   bool empty() const { return faces.empty(); }
   template <typename F>
-  void forEachVertex(F f) const {  // vertices shared by faces are visited once per face
-    for (const auto& face : faces)
-      for (const glm::dvec3& v : face) f(v);
+  void forEachVertex(F f) const {
+    for (const glm::dvec3& v : verts) f(v);
+  }
+  // verts from the faces: a vertex shared by faces has the same bits in each (clip() computes an edge's
+  // crossing from its ends in a fixed order), so exact duplicates are all there is to merge.
+  void collectVertices() {
+    verts.clear();
+    for (const auto& face : faces) verts.insert(verts.end(), face.begin(), face.end());
+    const auto less = [](const glm::dvec3& a, const glm::dvec3& b) {
+      return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+    };
+    std::sort(verts.begin(), verts.end(), less);
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
   }
 };
 
@@ -96,6 +107,7 @@ Polytope boxPolytope(const glm::dvec3& lo, const glm::dvec3& hi) {
     for (int i : quads[f]) face.push_back(corner(i));
     b.faces.push_back(face);
   }
+  b.collectVertices();
   return b;
 }
 
@@ -113,7 +125,9 @@ Polytope clip(const Polytope& p, const glm::dvec4& plane, double eps) {
       if (sa <= eps) g.push_back(a);
       if (std::abs(sa) <= eps) cut.push_back(a);
       if ((sa < -eps && sb > eps) || (sa > eps && sb < -eps)) {
-        const glm::dvec3 x = a + (b - a) * (sa / (sa - sb));
+        // From the inside end, so the face on the edge's other side (which walks it the other way) gets
+        // the same bits.
+        const glm::dvec3 x = sa < 0.0 ? a + (b - a) * (sa / (sa - sb)) : b + (a - b) * (sb / (sb - sa));
         g.push_back(x);
         cut.push_back(x);
       }
@@ -132,8 +146,15 @@ Polytope clip(const Polytope& p, const glm::dvec4& plane, double eps) {
     const glm::dvec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(n, glm::dvec3(1, 0, 0))
                                                             : glm::cross(n, glm::dvec3(0, 1, 0)));
     const glm::dvec3 v = glm::cross(n, u);
+    // Pseudo-angle: monotonic in the angle, in [0, 4), without atan2.
+    const auto pseudoAngle = [](double dx, double dy) {
+      const double d = std::abs(dx) + std::abs(dy);
+      if (!(d > 0.0)) return 0.0;
+      const double r = dy / d;  // in [-1, 1]
+      return dx >= 0.0 ? (r >= 0.0 ? r : 4.0 + r) : 2.0 - r;
+    };
     std::vector<std::pair<double, glm::dvec3>> ring;
-    for (const glm::dvec3& q : cut) ring.emplace_back(std::atan2(glm::dot(v, q - c), glm::dot(u, q - c)), q);
+    for (const glm::dvec3& q : cut) ring.emplace_back(pseudoAngle(glm::dot(u, q - c), glm::dot(v, q - c)), q);
     std::sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     std::vector<glm::dvec3> cap;
     for (const auto& [angle, q] : ring)
@@ -144,6 +165,7 @@ Polytope clip(const Polytope& p, const glm::dvec4& plane, double eps) {
       out.faces.push_back(std::move(cap));
     }
   }
+  out.collectVertices();
   return out;
 }
 
@@ -265,14 +287,11 @@ class TreeBuilder {
       glm::dvec4 pl;
       if (!facePlane(t, f, pl)) continue;
       bool outside = true;
-      for (const auto& face : region.faces) {
-        for (const glm::dvec3& v : face)
-          if (dist(pl, v) < -margin_) {
-            outside = false;
-            break;
-          }
-        if (!outside) break;
-      }
+      for (const glm::dvec3& v : region.verts)
+        if (dist(pl, v) < -margin_) {
+          outside = false;
+          break;
+        }
       if (outside) return false;
     }
     return true;
@@ -283,9 +302,8 @@ class TreeBuilder {
     for (int f = 0; f < 4; ++f) {
       glm::dvec4 pl;
       if (!facePlane(t, f, pl)) return false;
-      for (const auto& face : region.faces)
-        for (const glm::dvec3& v : face)
-          if (dist(pl, v) > margin_) return false;
+      for (const glm::dvec3& v : region.verts)
+        if (dist(pl, v) > margin_) return false;
     }
     return true;
   }
@@ -330,6 +348,15 @@ class TreeBuilder {
     const bool all = n <= kAllFacesUpTo;
     const size_t candidates = all ? n : kCandidateTets;
     const size_t sample = std::min(n, kScoreSample);
+    // The sample's corners in double, one array per axis (the scoring loop below is the build's hot spot).
+    double cx[4 * kScoreSample], cy[4 * kScoreSample], cz[4 * kScoreSample];
+    for (size_t k = 0; k < sample; ++k)
+      for (int i = 0; i < 4; ++i) {
+        const glm::dvec3 p = corner(list[(k * n) / sample], i);
+        cx[4 * k + size_t(i)] = p.x;
+        cy[4 * k + size_t(i)] = p.y;
+        cz[4 * k + size_t(i)] = p.z;
+      }
     for (size_t c = 0; c < candidates; ++c) {
       const int32_t t = all ? list[c] : list[(c * n) / kCandidateTets + n / (2 * kCandidateTets)];
       for (int f = 0; f < 4; ++f) {
@@ -347,11 +374,16 @@ class TreeBuilder {
           hi = std::max(hi, s);
         });
         if (!(lo < -margin_ && hi > margin_)) continue;  // does not cut the region
-        size_t under = 0, over = 0;
+        size_t under = 0, over = 0;                      // as classify() counts them
         for (size_t k = 0; k < sample; ++k) {
-          const int side = classify(list[(k * n) / sample], pl);
-          under += side < 0;
-          over += side > 0;
+          double slo = std::numeric_limits<double>::infinity(), shi = -slo;
+          for (size_t i = 4 * k; i < 4 * k + 4; ++i) {
+            const double d = pl.x * cx[i] + pl.y * cy[i] + pl.z * cz[i] + pl.w;
+            slo = std::min(slo, d);
+            shi = std::max(shi, d);
+          }
+          under += shi <= margin_ && slo < -margin_;
+          over += slo >= -margin_ && shi > margin_;
         }
         const double a = double(std::min(under, over)), b = double(std::max(under, over));
         const double kept = (a + b) / double(sample);

@@ -114,7 +114,9 @@ int benchLocate(int argc, char** argv) {
       "query's tet, Unity style), walk (from the coarse start grid), cgal_fast_location and cgal_hint\n"
       "(CGAL Delaunay_triangulation_3::locate on the level's probes, locate alone, one thread), brute\n"
       "(full scan, on a subset). mismatches: answers whose irradiance differs from grid_bsp's by > 1e-4\n"
-      "relative (CGAL: a different cell where grid_bsp's point is clearly inside its tet).\n"
+      "relative (CGAL: a different cell where grid_bsp's point is clearly inside its tet;\n"
+      "mismatches_not_a_cgal_cell: those where the level's tet is no cell of CGAL's triangulation of the\n"
+      "float-rounded probes).\n"
       "Queries: random = uniform in the probe bounds; coherent = a 2-D raster (pixel order) over a slanted\n"
       "plane through the bounds.",
       {{"--synthetic", "", "N", "bench on N random probes (one per m^3) instead of LEVEL", "0"},
@@ -198,6 +200,10 @@ int benchLocate(int argc, char** argv) {
     double rate = 0.0;
     size_t mismatches = 0, queries = 0;
     int threads = 1;
+    // CGAL only: mismatches where the level's tet is not a cell of CGAL's triangulation at all (CGAL
+    // triangulates the float-rounded local positions, the level the double world positions they came from;
+    // near-cospherical probes can be joined differently).
+    size_t otherTriangulation = 0;
   };
   std::vector<Method> methods;
 
@@ -264,25 +270,30 @@ int benchLocate(int argc, char** argv) {
       const glm::dvec3 x = world[i] - level.origin;
       q[i] = K::Point_3(x.x, x.y, x.z);
     }
+    // Mismatches, and how many of them are of a level tet that is not a CGAL cell.
     const auto countMismatches =
         [&](const auto& dt, const std::vector<typename std::decay_t<decltype(dt)>::Cell_handle>& cells) {
-          size_t bad = 0;
+          using Dt = std::decay_t<decltype(dt)>;
+          std::vector<typename Dt::Vertex_handle> byProbe(level.probes.size());
+          for (auto v : dt.finite_vertex_handles()) byProbe[size_t(v->info())] = v;
+          std::pair<size_t, size_t> bad{0, 0};
           for (size_t i = 0; i < n; ++i) {
             const Location& r = refLoc[i];
             if (!r.inside || std::min({r.weights[0], r.weights[1], r.weights[2], r.weights[3]}) < 1e-5f)
               continue;
-            if (dt.is_infinite(cells[i])) {
-              ++bad;
-              continue;
-            }
             int32_t a[4], b[4];
             for (int k = 0; k < 4; ++k) {
-              a[k] = cells[i]->vertex(k)->info();
+              a[k] = dt.is_infinite(cells[i]) ? -1 : cells[i]->vertex(k)->info();
               b[k] = level.tets[size_t(r.tet)].v[k];
             }
             std::sort(a, a + 4);
             std::sort(b, b + 4);
-            bad += !std::equal(a, a + 4, b);
+            if (std::equal(a, a + 4, b)) continue;
+            ++bad.first;
+            typename Dt::Cell_handle c;
+            const Tet& t = level.tets[size_t(r.tet)];
+            bad.second += !dt.is_cell(byProbe[size_t(t.v[0])], byProbe[size_t(t.v[1])],
+                                      byProbe[size_t(t.v[2])], byProbe[size_t(t.v[3])], c);
           }
           return bad;
         };
@@ -293,7 +304,9 @@ int benchLocate(int argc, char** argv) {
       std::vector<DelaunayFast::Cell_handle> cells(n);
       t0 = std::chrono::steady_clock::now();
       for (size_t i = 0; i < n; ++i) cells[i] = dt.locate(q[i]);
-      methods.push_back({"cgal_fast_location", double(n) / seconds(t0), countMismatches(dt, cells), n, 1});
+      const double rate = double(n) / seconds(t0);
+      const auto [bad, other] = countMismatches(dt, cells);
+      methods.push_back({"cgal_fast_location", rate, bad, n, 1, other});
     }
     {
       t0 = std::chrono::steady_clock::now();
@@ -303,7 +316,9 @@ int benchLocate(int argc, char** argv) {
       t0 = std::chrono::steady_clock::now();
       Delaunay::Cell_handle hint;
       for (size_t i = 0; i < n; ++i) hint = cells[i] = dt.locate(q[i], hint);
-      methods.push_back({"cgal_hint", double(n) / seconds(t0), countMismatches(dt, cells), n, 1});
+      const double rate = double(n) / seconds(t0);
+      const auto [bad, other] = countMismatches(dt, cells);
+      methods.push_back({"cgal_hint", rate, bad, n, 1, other});
     }
   }
   // brute: the full scan on a subset.
@@ -339,12 +354,14 @@ int benchLocate(int argc, char** argv) {
 
   if (args.has("--json")) {
     nlohmann::json list = nlohmann::json::array();
-    for (const Method& m : methods)
+    for (const Method& m : methods) {
       list.push_back({{"name", m.name},
                       {"queries_per_s", m.rate},
                       {"mismatches", m.mismatches},
                       {"queries", m.queries},
                       {"threads", m.threads}});
+      if (m.name.rfind("cgal", 0) == 0) list.back()["mismatches_not_a_cgal_cell"] = m.otherTriangulation;
+    }
     const nlohmann::json j = {{"level", source},
                               {"probes", level.probes.size()},
                               {"tets", level.tets.size()},
@@ -375,8 +392,11 @@ int benchLocate(int argc, char** argv) {
     std::printf("tetraprobe bench locate: %s, %zu probes, %zu tets, %zu queries (%s), %d threads\n",
                 source.c_str(), level.probes.size(), level.tets.size(), n, order.c_str(), threads);
     for (const Method& m : methods)
-      std::printf("  %-20s %12.0f queries/s  %zu mismatches of %zu (%d threads)\n", m.name.c_str(), m.rate,
-                  m.mismatches, m.queries, m.threads);
+      std::printf("  %-20s %12.0f queries/s  %zu mismatches of %zu (%d threads)%s\n", m.name.c_str(), m.rate,
+                  m.mismatches, m.queries, m.threads,
+                  m.name.rfind("cgal", 0) == 0
+                      ? (", " + std::to_string(m.otherTriangulation) + " of them not a CGAL cell").c_str()
+                      : "");
     std::printf(
         "  bsp: depth max %d mean %.2f, %zu nodes, %zu leaves (%zu unproven), %zu cells, %.1f bytes/tet, "
         "leaf tet is the answer for %.4f of inside queries; grid_bsp / cgal_fast_location %.1fx\n",
