@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -278,6 +279,36 @@ TEST_F(Cli, ShellProbesAreDilatedAndThePartitionDoesNotLeak) {
       EXPECT_LT(dg, 0.25f * lg) << "shell " << shell << " z " << z << ": dark face " << dg << ", lit face "
                                 << lg;
     }
+  }
+}
+
+// bench locate on a level with occlusion: every method (grid + BSP batch and single, cached and plain walks,
+// CGAL's locate, brute force) gives the same answers, the BSP leaves name the answer's tet, and the JSON has
+// the documented keys with consistent values.
+TEST_F(Cli, BenchLocateMethodsAgreeOnAnOccludedLevel) {
+  const std::string level = path("b.tpb").string();
+  const CliRun bake = run("bake " + sample() + " --spacing 0.5 --samples 16 -o " + level);
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  for (const char* order : {"random", "coherent"}) {
+    const CliRun b =
+        run(std::string("bench locate ") + level + " --queries 20000 --threads 2 --json --order " + order);
+    ASSERT_EQ(b.code, 0) << b.err;
+    const auto j = nlohmann::json::parse(b.out);
+    std::set<std::string> names;
+    for (const auto& m : j.at("methods")) {
+      names.insert(m.at("name").get<std::string>());
+      EXPECT_EQ(m.at("mismatches").get<int64_t>(), 0) << order << ": " << m.at("name");
+      EXPECT_GT(m.at("queries_per_s").get<double>(), 0.0);
+    }
+    for (const char* name :
+         {"grid_bsp", "grid_bsp_single", "walk_cached", "walk", "cgal_fast_location", "cgal_hint", "brute"})
+      EXPECT_TRUE(names.count(name)) << name;
+    const auto& bsp = j.at("bsp");
+    EXPECT_GE(bsp.at("leaf_tet_is_answer").get<double>(), 0.999);
+    EXPECT_EQ(bsp.at("node_bytes").get<int>(), 24);
+    EXPECT_GE(bsp.at("max_depth").get<double>(), bsp.at("mean_depth").get<double>());
+    const double bytes = 16.0 * bsp.at("hash_slots").get<double>() + 24.0 * bsp.at("nodes").get<double>();
+    EXPECT_NEAR(j.at("bytes_per_tet").get<double>(), bytes / j.at("tets").get<double>(), 1e-9);
   }
 }
 
