@@ -276,6 +276,41 @@ TEST(CellGrid, AgreesWithExactScanOnTenMillionQueriesOnALattice) {
   EXPECT_GE(agreeOnLevel(2), 10'000'000u);
 }
 
+// The answer does not depend on how the trees were split: three grids of different cell sizes (so different
+// cells, trees and leaves) give every point on a vertex, edge or face the same interpolation, probe weight by
+// probe weight, to 1e-6 (which of the tets sharing the point is named may differ; what they interpolate may
+// not).
+TEST(CellGrid, AnswerDoesNotDependOnTheSplits) {
+  for (int which = 0; which < 3; ++which) {
+    const Level level = which == 0 ? ballLevel() : which == 1 ? boxLevel() : latticeLevel();
+    const ProbeQuery a(level, 16.0f, 2), b(level, 2.0f, 2), c(level, 0.7f, 2);
+    ASSERT_NE(a.cellGrid().nodes.size(), b.cellGrid().nodes.size());
+    std::mt19937_64 rng(77 + uint64_t(which));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::uniform_int_distribution<size_t> anyTet(0, level.tets.size() - 1);
+    double worst = 0.0;
+    size_t differentTet = 0;
+    for (size_t k = 0; k < 60'000; ++k) {
+      const Tet& t = level.tets[anyTet(rng)];
+      glm::dvec3 p[4];
+      for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(t.v[i])]);
+      const double s = u(rng), r = u(rng) * (1.0 - s);
+      const glm::dvec3 x = k % 3 == 0   ? p[k % 4]
+                           : k % 3 == 1 ? s * p[0] + (1.0 - s) * p[(k / 3) % 3 + 1]
+                                        : s * p[1] + r * p[2] + (1.0 - s - r) * p[3];
+      const Location la = a.locate(level.origin + x), lb = b.locate(level.origin + x),
+                     lc = c.locate(level.origin + x);
+      differentTet += la.tet != lb.tet || la.tet != lc.tet;
+      worst = std::max({worst, weightDifference(level, la, lb), weightDifference(level, la, lc)});
+    }
+    EXPECT_LE(worst, 1e-6) << "level " << which;
+    std::printf(
+        "level %d: %zu of 60000 boundary points named a different tet by another grid; worst weight "
+        "difference %.2e\n",
+        which, differentTet, worst);
+  }
+}
+
 // The hash table keeps its stated bound, is at most half full, and every stored cell is found.
 TEST(CellGrid, HashProbeBoundHolds) {
   const Level level = boxLevel();
