@@ -78,16 +78,22 @@ bool sameIrradiance(const glm::vec3& a, const glm::vec3& b) {
   return true;
 }
 
-// A synthetic level: n random probes at about one per cubic metre, random SH, outer cells.
-Level syntheticLevel(size_t n, uint64_t seed) {
+// A synthetic level of n probes at about one per cubic metre, random SH, outer cells: uniformly random
+// positions (the worst case for the BSP: long thin Delaunay tets), or a 1 m lattice (what voxel placement
+// makes: cospherical everywhere), filled x fastest.
+Level syntheticLevel(size_t n, uint64_t seed, bool lattice) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::uniform_real_distribution<float> sh(-0.2f, 0.2f);
   const double side = std::cbrt(double(n));
+  const auto cells = size_t(std::ceil(side));
   Level level;
   level.origin = glm::dvec3(1000.0, 0.0, -2000.0);
   std::vector<glm::dvec3> world(n);
-  for (glm::dvec3& p : world) p = level.origin + side * glm::dvec3(u(rng), u(rng), u(rng));
+  for (size_t i = 0; i < n; ++i)
+    world[i] = level.origin + (lattice ? glm::dvec3(double(i % cells), double((i / cells) % cells),
+                                                    double(i / (cells * cells)))
+                                       : side * glm::dvec3(u(rng), u(rng), u(rng)));
   for (const glm::dvec3& p : world) {
     level.probes.push_back(glm::vec3(p - level.origin));
     ShRgb s;
@@ -105,7 +111,8 @@ Level syntheticLevel(size_t n, uint64_t seed) {
 
 int benchLocate(int argc, char** argv) {
   Args args(
-      "tetraprobe bench locate [LEVEL.tpb] [--synthetic N] [--queries N] [--order random|coherent] "
+      "tetraprobe bench locate [LEVEL.tpb] [--synthetic N [--layout random|lattice]] [--queries N] [--order "
+      "random|coherent] "
       "[--threads T] [--json]",
       "Locates the same query points (and interpolates their SH irradiance) with every method in one run:\n"
       "grid_bsp (sparse cell grid + BSP, ProbeQuery::irradianceBatch), grid_bsp_single (the same, one\n"
@@ -120,6 +127,8 @@ int benchLocate(int argc, char** argv) {
       "Queries: random = uniform in the probe bounds; coherent = a 2-D raster (pixel order) over a slanted\n"
       "plane through the bounds.",
       {{"--synthetic", "", "N", "bench on N random probes (one per m^3) instead of LEVEL", "0"},
+       {"--layout", "", "random|lattice", "--synthetic: probe positions (lattice: 1 m, as voxel placement)",
+        "random"},
        {"--queries", "", "N", "query points", "1000000"},
        {"--order", "", "random|coherent", "query order", "random"},
        {"--threads", "", "N", "threads for the runtime methods, 0 = all cores", "0"},
@@ -150,8 +159,10 @@ int benchLocate(int argc, char** argv) {
   std::string source;
   auto t0 = std::chrono::steady_clock::now();
   if (synthetic > 0) {
-    level = syntheticLevel(size_t(synthetic), seed);
-    source = "synthetic:" + std::to_string(synthetic);
+    const std::string layout = args.str("--layout");
+    if (layout != "random" && layout != "lattice") throw UsageError("--layout must be random or lattice");
+    level = syntheticLevel(size_t(synthetic), seed, layout == "lattice");
+    source = "synthetic:" + std::to_string(synthetic) + (layout == "lattice" ? ":lattice" : "");
   } else {
     source = args.positional()[0];
     if (LevelResult r = loadLevel(source, level); !r) throw InputError(r.message);
