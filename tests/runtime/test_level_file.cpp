@@ -401,6 +401,32 @@ TEST(LevelFile, SkipsUnknownOptionalSection) {
   EXPECT_EQ(loadLevel(dir.file("bad.tpb"), back).status, LevelStatus::kCorrupt);
 }
 
+// Levels written before leaves named one tet carry the retired CGRD section (leaves listing up to 8 tets): it
+// is skipped like any unknown optional section, and the query builds the grid itself, answering as a level
+// that stores one.
+TEST(LevelFile, RetiredCellGridSectionIsSkippedAndRebuilt) {
+  TempDir dir;
+  Level level = smallLevel();
+  const Level stored = level;
+  level.cellGrid = CellGrid{};
+  ASSERT_TRUE(saveLevel(dir.file("bare.tpb"), level));
+  const std::vector<char> b =
+      withExtraSection(bytesOf(dir.file("bare.tpb")), "CGRD", 0, std::string(64 + 16 * 16, '\x01'));
+  writeBytes(dir.file("old.tpb"), b, b.size());
+  Level back;
+  const LevelResult r = loadLevel(dir.file("old.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  EXPECT_TRUE(back.cellGrid.slots.empty());
+  const ProbeQuery rebuilt(back, 2.0f, 1), fromFile(stored, 2.0f, 1);
+  EXPECT_EQ(rebuilt.cellGrid().nodes.size(), stored.cellGrid.nodes.size());
+  for (int k = 0; k < 200; ++k) {
+    const glm::dvec3 x = back.origin + glm::dvec3(-2.5 + 0.025 * k, 0.3 - 0.004 * k, -3.2 + 0.032 * k);
+    const Location a = rebuilt.locate(x), c = fromFile.locate(x);
+    EXPECT_EQ(a.tet, c.tet);
+    EXPECT_EQ(a.weights, c.weights);
+  }
+}
+
 // A section flagged as required that this reader does not know must not be ignored.
 TEST(LevelFile, RefusesUnknownRequiredSection) {
   TempDir dir;
