@@ -67,7 +67,6 @@ struct Polytope {
   std::vector<std::vector<glm::dvec3>> faces;
   std::vector<glm::dvec3> verts;
 
-  bool empty() const { return faces.empty(); }
   template <typename F>
   void forEachVertex(F f) const {
     for (const glm::dvec3& v : verts) f(v);
