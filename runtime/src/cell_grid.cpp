@@ -67,9 +67,11 @@ struct Polytope {
   std::vector<std::vector<glm::dvec3>> faces;
   std::vector<glm::dvec3> verts;
 
-  template <typename F>
-  void forEachVertex(F f) const {
-    for (const glm::dvec3& v : verts) f(v);
+  // The mean of the distinct vertices (inside the polytope; the origin when it has none).
+  glm::dvec3 centroid() const {
+    glm::dvec3 c(0.0);
+    for (const glm::dvec3& v : verts) c += v;
+    return verts.empty() ? c : c / double(verts.size());
   }
   // verts from the faces: a vertex shared by faces has the same bits in each (clip() computes an edge's
   // crossing from its ends in a fixed order), so exact duplicates are all there is to merge.
@@ -169,14 +171,7 @@ Polytope clip(const Polytope& p, const glm::dvec4& plane, double eps) {
 }
 
 double volume(const Polytope& p) {
-  glm::dvec3 c(0.0);
-  size_t n = 0;
-  p.forEachVertex([&](const glm::dvec3& v) {
-    c += v;
-    ++n;
-  });
-  if (n == 0) return 0.0;
-  c /= double(n);
+  const glm::dvec3 c = p.centroid();
   double vol = 0.0;
   for (size_t i = 0; i < p.faces.size(); ++i) {
     const std::vector<glm::dvec3>& f = p.faces[i];
@@ -229,7 +224,7 @@ class TreeBuilder {
     const auto index = int32_t(out_.nodes.size());
     out_.nodes.push_back(BspNode{{fplane[0], fplane[1], fplane[2], fplane[3]}, {0, 0}});
     const int32_t u = build(under, lo, depth + 1);
-    Polytope().faces.swap(under.faces);
+    under = Polytope();  // freed before the other subtree: only the current path's regions stay alive
     const int32_t o = build(over, hi, depth + 1);
     out_.nodes[size_t(index)].child[0] = u;
     out_.nodes[size_t(index)].child[1] = o;
@@ -310,13 +305,7 @@ class TreeBuilder {
   // The tet of `list` holding the region's vertex centroid best (largest smallest distance inside its faces;
   // ties: the first).
   int32_t centroidTet(const Polytope& region, const std::vector<int32_t>& list) const {
-    glm::dvec3 c(0.0);
-    size_t n = 0;
-    region.forEachVertex([&](const glm::dvec3& v) {
-      c += v;
-      ++n;
-    });
-    if (n > 0) c /= double(n);
+    const glm::dvec3 c = region.centroid();
     int32_t best = list[0];
     double bestDepth = -std::numeric_limits<double>::infinity();
     for (int32_t t : list) {
@@ -347,15 +336,6 @@ class TreeBuilder {
     const bool all = n <= kAllFacesUpTo;
     const size_t candidates = all ? n : kCandidateTets;
     const size_t sample = std::min(n, kScoreSample);
-    // The sample's corners in double, one array per axis (the scoring loop below is the build's hot spot).
-    double cx[4 * kScoreSample], cy[4 * kScoreSample], cz[4 * kScoreSample];
-    for (size_t k = 0; k < sample; ++k)
-      for (int i = 0; i < 4; ++i) {
-        const glm::dvec3 p = corner(list[(k * n) / sample], i);
-        cx[4 * k + size_t(i)] = p.x;
-        cy[4 * k + size_t(i)] = p.y;
-        cz[4 * k + size_t(i)] = p.z;
-      }
     for (size_t c = 0; c < candidates; ++c) {
       const int32_t t = all ? list[c] : list[(c * n) / kCandidateTets + n / (2 * kCandidateTets)];
       for (int f = 0; f < 4; ++f) {
@@ -367,22 +347,17 @@ class TreeBuilder {
         if (!(len > 0.0)) continue;
         pl /= len;
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-        region.forEachVertex([&](const glm::dvec3& v) {
+        for (const glm::dvec3& v : region.verts) {
           const double s = dist(pl, v);
           lo = std::min(lo, s);
           hi = std::max(hi, s);
-        });
+        }
         if (!(lo < -margin_ && hi > margin_)) continue;  // does not cut the region
-        size_t under = 0, over = 0;                      // as classify() counts them
+        size_t under = 0, over = 0;
         for (size_t k = 0; k < sample; ++k) {
-          double slo = std::numeric_limits<double>::infinity(), shi = -slo;
-          for (size_t i = 4 * k; i < 4 * k + 4; ++i) {
-            const double d = pl.x * cx[i] + pl.y * cy[i] + pl.z * cz[i] + pl.w;
-            slo = std::min(slo, d);
-            shi = std::max(shi, d);
-          }
-          under += shi <= margin_ && slo < -margin_;
-          over += slo >= -margin_ && shi > margin_;
+          const int side = classify(list[(k * n) / sample], pl);
+          under += side < 0;
+          over += side > 0;
         }
         const double a = double(std::min(under, over)), b = double(std::max(under, over));
         const double kept = (a + b) / double(sample);

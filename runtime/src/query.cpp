@@ -785,7 +785,15 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
         __builtin_prefetch(grid.slots.data() + slot[k]);
       }
     }
-    // The cell's tree, then its nodes down to the leaf, one level per round.
+    // The cell's tree, then its nodes down to the leaf, one level per round; each step prefetches what the
+    // code it reached names (a node, or the leaf's tet). True while a node is still to descend.
+    const auto prefetchCode = [&](int32_t c) {
+      if (c >= 0)
+        __builtin_prefetch(grid.nodes.data() + c);
+      else if (bspLeafTet(c) >= 0)
+        prefetchTet(tets, bspLeafTet(c));
+      return c >= 0;
+    };
     bool descending = false;
     for (size_t k = 0; k < n; ++k) {
       code[k] = 0;
@@ -794,24 +802,14 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
         haveKey[k] = false;  // no leaf: the start grid's tet
         continue;
       }
-      if (code[k] >= 0) {
-        __builtin_prefetch(grid.nodes.data() + code[k]);
-        descending = true;
-      } else if (bspLeafTet(code[k]) >= 0) {
-        prefetchTet(tets, bspLeafTet(code[k]));
-      }
+      descending |= prefetchCode(code[k]);
     }
     while (descending) {
       descending = false;
       for (size_t k = 0; k < n; ++k) {
         if (done[k] || !haveKey[k] || code[k] < 0) continue;
         code[k] = cellGridChild(grid.nodes[size_t(code[k])], x[k]);
-        if (code[k] >= 0) {
-          __builtin_prefetch(grid.nodes.data() + code[k]);
-          descending = true;
-        } else if (bspLeafTet(code[k]) >= 0) {
-          prefetchTet(tets, bspLeafTet(code[k]));
-        }
+        descending |= prefetchCode(code[k]);
       }
     }
     // The leaf's tet, then plain walk steps in lock step.

@@ -257,11 +257,9 @@ size_t agreeOnLevel(int which) {
     std::printf(
         "level %d, %g m cells: %zu cells in %zu slots (probe bound %u), %zu nodes, depth max %d mean %.1f; "
         "%zu queries, %zu inside\n",
-        which, double(cellSize),
-        size_t(std::count_if(q.cellGrid().slots.begin(), q.cellGrid().slots.end(),
-                             [](const CellSlot& s) { return s.key[0] != INT32_MIN; })),
-        q.cellGrid().slots.size(), q.cellGrid().maxProbe, q.cellGrid().nodes.size(), q.cellGrid().maxDepth,
-        q.cellGrid().meanDepth, tally.queries, tally.inside);
+        which, double(cellSize), occupiedCells(q.cellGrid()), q.cellGrid().slots.size(),
+        q.cellGrid().maxProbe, q.cellGrid().nodes.size(), q.cellGrid().maxDepth, q.cellGrid().meanDepth,
+        tally.queries, tally.inside);
   }
   return total;
 }
@@ -361,10 +359,8 @@ TEST(CellGrid, LeafNamesTheTetHoldingThePoint) {
     for (float cellSize : {16.0f, 2.0f}) {
       const CellGrid g = buildCellGrid(level.probes, level.tets, cellSize, 2);
       EXPECT_LE(100 * g.unprovenLeaves, g.leaves) << "level " << which << ", " << cellSize << " m cells";
-      EXPECT_GE(g.leaves, level.tets.size());  // every tet holds a point in some leaf
-      EXPECT_EQ(g.leaves, g.nodes.size() + size_t(std::count_if(g.slots.begin(), g.slots.end(), [](auto& s) {
-                            return s.key[0] != INT32_MIN;
-                          })));  // a binary tree per cell: leaves = nodes + 1
+      EXPECT_GE(g.leaves, level.tets.size());                  // every tet holds a point in some leaf
+      EXPECT_EQ(g.leaves, g.nodes.size() + occupiedCells(g));  // a binary tree per cell: leaves = nodes + 1
       EXPECT_LE(g.meanDepth, double(g.maxDepth));
       std::mt19937_64 rng(5 + uint64_t(which));
       std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -392,9 +388,7 @@ TEST(CellGrid, LeafNamesTheTetHoldingThePoint) {
           "level %d, %g m cells: %zu tets, %zu leaves, %zu nodes (%.1f bytes/tet), depth max %d, mean "
           "%.2f\n",
           which, double(cellSize), level.tets.size(), g.leaves, g.nodes.size(),
-          double(g.nodes.size() * sizeof(BspNode) + g.slots.size() * sizeof(CellSlot)) /
-              double(level.tets.size()),
-          g.maxDepth, g.meanDepth);
+          double(cellGridBytes(g)) / double(level.tets.size()), g.maxDepth, g.meanDepth);
     }
   }
 }

@@ -218,6 +218,7 @@ int benchLocate(int argc, char** argv) {
     // triangulates the float-rounded local positions, the level the double world positions they came from;
     // near-cospherical probes can be joined differently).
     size_t otherTriangulation = 0;
+    bool cgal() const { return name.rfind("cgal", 0) == 0; }
   };
   std::vector<Method> methods;
 
@@ -348,9 +349,8 @@ int benchLocate(int argc, char** argv) {
   }
 
   const CellGrid& grid = query.cellGrid();
-  size_t cells = 0;
-  for (const CellSlot& s : grid.slots) cells += s.key[0] != INT32_MIN;
-  const double gridBytes = double(grid.nodes.size() * sizeof(BspNode) + grid.slots.size() * sizeof(CellSlot));
+  const size_t cells = occupiedCells(grid);
+  const double gridBytes = double(cellGridBytes(grid));
   // How often the leaf's tet is the answer itself (the walk accepts it without a step), over the queries
   // inside the hull.
   size_t insideQueries = 0, leafIsAnswer = 0;
@@ -374,7 +374,7 @@ int benchLocate(int argc, char** argv) {
                       {"mismatches", m.mismatches},
                       {"queries", m.queries},
                       {"threads", m.threads}});
-      if (m.name.rfind("cgal", 0) == 0) list.back()["mismatches_not_a_cgal_cell"] = m.otherTriangulation;
+      if (m.cgal()) list.back()["mismatches_not_a_cgal_cell"] = m.otherTriangulation;
     }
     const nlohmann::json j = {{"level", source},
                               {"probes", level.probes.size()},
@@ -406,11 +406,10 @@ int benchLocate(int argc, char** argv) {
     std::printf("tetraprobe bench locate: %s, %zu probes, %zu tets, %zu queries (%s), %d threads\n",
                 source.c_str(), level.probes.size(), level.tets.size(), n, order.c_str(), threads);
     for (const Method& m : methods)
-      std::printf("  %-20s %12.0f queries/s  %zu mismatches of %zu (%d threads)%s\n", m.name.c_str(), m.rate,
-                  m.mismatches, m.queries, m.threads,
-                  m.name.rfind("cgal", 0) == 0
-                      ? (", " + std::to_string(m.otherTriangulation) + " of them not a CGAL cell").c_str()
-                      : "");
+      std::printf(
+          "  %-20s %12.0f queries/s  %zu mismatches of %zu (%d threads)%s\n", m.name.c_str(), m.rate,
+          m.mismatches, m.queries, m.threads,
+          m.cgal() ? (", " + std::to_string(m.otherTriangulation) + " of them not a CGAL cell").c_str() : "");
     std::printf(
         "  bsp: depth max %d mean %.2f, %zu nodes, %zu leaves (%zu unproven), %zu cells, %.1f bytes/tet, "
         "leaf tet is the answer for %.4f of inside queries; grid_bsp / cgal_fast_location %.1fx\n",

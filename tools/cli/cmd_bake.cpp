@@ -189,9 +189,7 @@ int cmdBake(int argc, char** argv) {
   else
     std::printf("  occl    none\n");
   const CellGrid& grid = level.cellGrid;
-  const size_t gridBytes = grid.slots.size() * sizeof(CellSlot) + grid.nodes.size() * sizeof(BspNode);
-  size_t gridCells = 0;
-  for (const CellSlot& s : grid.slots) gridCells += s.key[0] != INT32_MIN;
+  const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
       "  locate  %zu cells of %g m, BSP %zu nodes, %zu leaves (one tet each), depth max %d mean %.1f; "
       "%zu bytes (%.1f per tet)\n",

@@ -38,9 +38,7 @@ int cmdInspect(int argc, char** argv) {
   if (!content.empty()) content.pop_back();
   const uint64_t bytes = std::filesystem::file_size(path);
   const CellGrid& grid = level.cellGrid;
-  size_t cells = 0;
-  for (const CellSlot& s : grid.slots) cells += s.key[0] != INT32_MIN;
-  const size_t gridBytes = grid.slots.size() * sizeof(CellSlot) + grid.nodes.size() * sizeof(BspNode);
+  const size_t cells = occupiedCells(grid), gridBytes = cellGridBytes(grid);
 
   if (args.has("--json")) {
     nlohmann::json j = {{"path", path},

@@ -64,6 +64,17 @@ struct CellGrid {
 
 inline constexpr uint32_t kMaxCellProbe = 8;
 
+// Occupied cells (used hash slots), and the grid's size in memory, on the GPU and in the level file
+// (16 bytes a slot, 24 a node).
+inline size_t occupiedCells(const CellGrid& grid) {
+  size_t n = 0;
+  for (const CellSlot& s : grid.slots) n += s.key[0] != INT32_MIN;
+  return n;
+}
+inline size_t cellGridBytes(const CellGrid& grid) {
+  return grid.slots.size() * sizeof(CellSlot) + grid.nodes.size() * sizeof(BspNode);
+}
+
 // The table's hash of cell coordinates (32-bit arithmetic, mirrored by tetraprobeCellHash in
 // shaders/tetraprobe.glsl): a slot search starts at cellHash(key) & (slots.size() - 1).
 uint32_t cellHash(int32_t x, int32_t y, int32_t z);
