@@ -75,6 +75,83 @@ void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh)
   }
 }
 
+// Adaptive sampling (BakeOptions::targetRelError): the running state of one probe.
+struct AdaptiveProbe {
+  double acc[kShCoeffCount][3] = {};  // sum over batches of the batch SH
+  int batches = 0;
+  double mean[6] = {}, m2[6] = {};  // Welford over batches of Y(E(n)) at the six axis normals
+};
+
+constexpr uint64_t kBatchRotationTag = 1ull << 62;
+
+// Y(E(n)) at the six axis normals of a batch SH: E(n) = sum_l A_l L_lm Y_lm(n) (runtime/sh.h), in double.
+void axisLuminance(const double sh[kShCoeffCount][3], double out[6]) {
+  static const glm::dvec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int k = 0; k < 6; ++k) {
+    const auto y = shBasis<double>(axes[k].x, axes[k].y, axes[k].z);
+    double e[3] = {0, 0, 0};
+    for (int i = 0; i < kShCoeffCount; ++i)
+      for (int c = 0; c < 3; ++c) e[c] += shCosineLobe(i) * sh[i][c] * y[size_t(i)];
+    out[k] = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+  }
+}
+
+void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options,
+              AdaptiveProbe& st) {
+  const TraceSettings settings{options.bounces, options.content};
+  const uint64_t b = uint64_t(st.batches);
+  const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kBatchRotationTag | b));
+  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(kBakeBatchSize);
+  double acc[kShCoeffCount][3] = {};
+  for (int k = 0; k < kBakeBatchSize; ++k) {
+    const glm::vec3 d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
+    Rng rng(streamKey(options.seed, index, b * kBakeBatchSize + uint64_t(k) + 1));
+    const glm::vec3 l = incidentRadiance(tracer, probe, d, 0.0f, settings, rng);
+    const auto y = shBasis<double>(d.x, d.y, d.z);
+    for (int i = 0; i < kShCoeffCount; ++i)
+      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * y[size_t(i)];
+  }
+  const double scale = 4.0 * std::numbers::pi / kBakeBatchSize;
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int c = 0; c < 3; ++c) {
+      acc[i][c] *= scale;
+      st.acc[i][c] += acc[i][c];
+    }
+  double q[6];
+  axisLuminance(acc, q);
+  ++st.batches;
+  for (int k = 0; k < 6; ++k) {
+    const double delta = q[k] - st.mean[k];
+    st.mean[k] += delta / double(st.batches);
+    st.m2[k] += delta * (q[k] - st.mean[k]);
+  }
+}
+
+// Mean over the axis normals of Y(E(n)).
+double adaptiveMean(const AdaptiveProbe& st) {
+  double m = 0.0;
+  for (double v : st.mean) m += v;
+  return m / 6.0;
+}
+
+// The achieved relative standard error (BakeOptions::targetRelError), against max(mean, floor).
+double adaptiveRelError(const AdaptiveProbe& st, double floor) {
+  if (st.batches < 2) return std::numeric_limits<double>::infinity();
+  double se = 0.0;
+  for (int k = 0; k < 6; ++k) se = std::max(se, std::sqrt(st.m2[k] / double(st.batches - 1) / st.batches));
+  const double denom = std::max(std::abs(adaptiveMean(st)), floor);
+  return denom > 0.0 ? se / denom : (se > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+}
+
+ShRgb adaptiveSh(const SceneTracer& tracer, const glm::vec3& probe, const BakeOptions& options,
+                 const AdaptiveProbe& st) {
+  ShRgb sh;
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int c = 0; c < 3; ++c) sh.c[size_t(i)][c] = float(st.acc[i][c] / std::max(st.batches, 1));
+  if (options.content & kContentDirectPunctual) addPunctualSh(tracer, probe, sh);
+  return sh;
+}
+
 }  // namespace
 
 ShRgb bake_detail::bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
@@ -109,6 +186,12 @@ void bake_detail::validateBakeOptions(const BakeOptions& options) {
     throw InputError("bake: bounces must be >= 0 (got " + std::to_string(options.bounces) + ")");
   if (options.shOrder != 1 && options.shOrder != 2)
     throw InputError("bake: SH order must be 1 or 2 (got " + std::to_string(options.shOrder) + ")");
+  if (!(options.targetRelError >= 0.0) || !std::isfinite(options.targetRelError))
+    throw InputError("bake: target relative error must be finite and >= 0 (got " +
+                     std::to_string(options.targetRelError) + ")");
+  if (options.targetRelError > 0.0 && options.maxSamplesPerProbe < options.samplesPerProbe)
+    throw InputError("bake: maxSamplesPerProbe (" + std::to_string(options.maxSamplesPerProbe) +
+                     ") is below samplesPerProbe (" + std::to_string(options.samplesPerProbe) + ")");
 }
 
 void truncateShOrder(std::vector<ShRgb>& sh, int order) {
@@ -156,16 +239,65 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
   std::vector<ShRgb> out(probes.size());
   std::vector<RayTap> taps(stats ? probes.size() : 0);  // per probe: sums independent of the threads
   std::unique_ptr<Progress> progress;
-  if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
-  parallelFor(probes.size(), options.threads, [&](size_t i) {
-    if (stats) {
-      RayTapScope scope(taps[i]);
-      out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
-    } else {
-      out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+  const bool adaptive = options.targetRelError > 0.0;
+  std::vector<int> paths(probes.size(), options.samplesPerProbe);
+  std::vector<double> achieved;
+  if (!adaptive) {
+    if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
+    parallelFor(probes.size(), options.threads, [&](size_t i) {
+      if (stats) {
+        RayTapScope scope(taps[i]);
+        out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+      } else {
+        out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
+      }
+      if (progress) progress->advance();
+    });
+  } else {
+    const int minBatches = std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
+    const int maxBatches = std::max(minBatches, options.maxSamplesPerProbe / kBakeBatchSize);
+    std::vector<AdaptiveProbe> state(probes.size());
+    auto run = [&](size_t i, auto&& body) {
+      if (stats) {
+        RayTapScope scope(taps[i]);
+        body();
+      } else {
+        body();
+      }
+    };
+    // Pass 1: every probe's minimum; then the floor from the level's median; pass 2: each probe to its target.
+    if (options.progress) progress = std::make_unique<Progress>("bake (pass 1)", probes.size(), "probes");
+    parallelFor(probes.size(), options.threads, [&](size_t i) {
+      run(i, [&] {
+        DenormalScope denormals;
+        while (state[i].batches < minBatches) addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+      });
+      if (progress) progress->advance();
+    });
+    if (progress) progress->finish();
+    std::vector<double> means(probes.size());
+    for (size_t i = 0; i < probes.size(); ++i) means[i] = std::abs(adaptiveMean(state[i]));
+    double median = 0.0;
+    if (!means.empty()) {
+      std::nth_element(means.begin(), means.begin() + long(means.size() / 2), means.end());
+      median = means[means.size() / 2];
     }
-    if (progress) progress->advance();
-  });
+    const double floor = kBakeErrorFloor * median;
+    if (options.progress) progress = std::make_unique<Progress>("bake (to target)", probes.size(), "probes");
+    achieved.resize(probes.size());
+    parallelFor(probes.size(), options.threads, [&](size_t i) {
+      run(i, [&] {
+        DenormalScope denormals;
+        AdaptiveProbe& st = state[i];
+        while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
+          addBatch(tracer, glm::vec3(probes[i]), i, options, st);
+        achieved[i] = adaptiveRelError(st, floor);
+        out[i] = adaptiveSh(tracer, glm::vec3(probes[i]), options, st);
+      });
+      paths[i] = state[i].batches * kBakeBatchSize;
+      if (progress) progress->advance();
+    });
+  }
   if (progress) progress->finish();
   truncateShOrder(out, options.shOrder);
   if (stats) {
@@ -173,6 +305,21 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     for (const RayTap& t : taps) {
       stats->intersectRays += t.intersects;
       stats->occludedRays += t.occludeds;
+    }
+    for (int n : paths) {
+      stats->paths += uint64_t(n);
+      stats->maxPathsPerProbe = std::max(stats->maxPathsPerProbe, n);
+    }
+    if (!achieved.empty()) {
+      std::vector<double> sorted = achieved;
+      std::sort(sorted.begin(), sorted.end());
+      double sum = 0.0;
+      for (double e : sorted) sum += std::isfinite(e) ? e : 0.0;
+      stats->meanRelError = sum / double(sorted.size());
+      stats->p95RelError =
+          sorted[std::min(sorted.size() - 1, size_t(std::ceil(0.95 * double(sorted.size()))) - 1)];
+      stats->maxRelError = sorted.back();
+      for (double e : achieved) stats->probesAtCap += e > options.targetRelError ? 1 : 0;
     }
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

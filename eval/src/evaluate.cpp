@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 
+#include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/eval/nearest_probe.h"
@@ -31,12 +32,22 @@ uint64_t mix(uint64_t x) {  // SplitMix64 finaliser: per-point seeds independent
 
 }  // namespace
 
+const char* evalSamplingName(EvalSampling sampling) {
+  return sampling == EvalSampling::kCameras ? "cameras" : "area";
+}
+
 EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options) {
+  if (options.sampling == EvalSampling::kCameras && options.cameras.empty())
+    throw InputError("eval: camera sampling needs at least one camera (the scene names none)");
   EvalReport report;
+  report.sampling = options.sampling;
   report.samplesPerPoint = options.samplesPerPoint;
   report.referenceBounces = options.referenceBounces;
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<SurfacePoint> surface = sampleSurfacePoints(tracer, options.points, options.seed);
+  const std::vector<SurfacePoint> surface =
+      options.sampling == EvalSampling::kCameras
+          ? sampleCameraPoints(tracer, options.cameras, options.points, options.seed)
+          : sampleSurfacePoints(tracer, options.points, options.seed);
   report.points.resize(surface.size());
   BakeOptions bake;
   bake.bounces = options.referenceBounces;
@@ -82,7 +93,7 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
 
   std::vector<double> rel(n);
   double se = 0.0, leak = 0.0, leakIndirect = 0.0;
-  size_t indirect = 0;
+  size_t indirect = 0, gross = 0, dark = 0;
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 x = m.values[i], r = report.points[i].reference.irradiance;
     double e = 0.0;
@@ -92,6 +103,9 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
       e += std::abs(d) / std::sqrt(double(r[c]) * r[c] + kFloor);
     }
     rel[i] = e / 3.0;
+    const double lx = std::max(luminance(x), kFloor), lr = std::max(luminance(r), kFloor);
+    gross += (lx > 2.0 * lr || lx < 0.5 * lr) ? 1 : 0;
+    dark += lx < 0.25 * lr ? 1 : 0;
     const double l = std::max(0.0, luminance(x) - luminance(r)) / std::max(luminance(r), kFloor);
     leak += l;
     if (report.points[i].indirectOnly) {
@@ -106,6 +120,8 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
     for (double e : rel) sum += e;
     m.meanRelError = sum / double(n);
     m.leak = leak / double(n);
+    m.grossError = double(gross) / double(n);
+    m.darkHoles = double(dark) / double(n);
     std::vector<double> sorted = rel;
     std::sort(sorted.begin(), sorted.end());
     m.p95RelError = sorted[std::min(n - 1, size_t(std::ceil(0.95 * double(n))) - 1)];
@@ -155,6 +171,21 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
 }  // namespace tetraprobe
 
 namespace tetraprobe {
+
+std::vector<float> fallbackShares(const Level& level, const EvalReport& report) {
+  std::vector<float> out(report.points.size(), 0.0f);
+  if (level.occlusion.empty()) return out;
+  const ProbeQuery query(level);
+  for (size_t i = 0; i < out.size(); ++i) {
+    const EvalPoint& p = report.points[i];
+    const Location loc = query.locate(p.surface.position);
+    if (loc.tet < 0) continue;
+    const glm::vec3 local(p.surface.position - level.origin);
+    applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, p.surface.normal),
+                   &out[i]);
+  }
+  return out;
+}
 
 LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion) {
   auto query = std::make_shared<ProbeQuery>(level);

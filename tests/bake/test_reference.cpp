@@ -221,6 +221,43 @@ TEST(Reference, FurnaceIrradianceIsPiTimesGeometricSeries) {
   }
 }
 
+// The unbiased oracle (and bake): paths end by Russian roulette only, so inside a closed emissive sphere of
+// albedo 0.9 the irradiance converges to the infinite series pi Le / (1 - a) = 10 pi Le, which any fixed
+// depth misses (8 bounces give 1 - 0.9^9 = 61 % of it). Tolerance 4 sigma + 2e-4 relative; the probe at the
+// centre sees Le / (1 - a) in every direction. A path's length is geometric here (relative standard deviation
+// ~0.95 per path), so 4096 paths leave ~1.5 % noise: tolerance 6 % (4 sigma).
+TEST(Reference, WhiteFurnaceWithUnboundedDepthConvergesToInfiniteSeries) {
+  Scene s;
+  const float a = 0.9f;
+  const glm::vec3 le(1.0f, 0.5f, 2.0f);
+  const uint32_t m = test::addMaterial(s, glm::vec3(a), le);
+  test::addSphere(s, glm::vec3(0.0f), 1.0f, true, m);
+  SceneTracer tracer(s);
+  const glm::uvec3 t = s.triangles[200];
+  const glm::vec3 c = (s.positions[t.x] + s.positions[t.y] + s.positions[t.z]) / 3.0f;
+  const glm::vec3 n =
+      glm::normalize(glm::cross(s.positions[t.y] - s.positions[t.x], s.positions[t.z] - s.positions[t.x]));
+  const BakeOptions o = opts(kUnboundedBounces, kContentAll);
+  EXPECT_EQ(BakeOptions{}.bounces, kUnboundedBounces) << "the default depth is unbiased";
+  const ReferenceIrradiance r = referenceIrradiance(tracer, glm::dvec3(c), n, 8192, 5, o);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double exact = kPi * le[ch] / (1.0 - a);
+    EXPECT_NEAR(r.irradiance[ch], exact, 4 * r.stderror[ch] + 2e-4 * exact) << "channel " << ch;
+    // and a fixed depth of 8 is measurably dark: it must not pass the same test
+    const ReferenceIrradiance r8 =
+        referenceIrradiance(tracer, glm::dvec3(c), n, 2048, 5, opts(8, kContentAll));
+    EXPECT_LT(r8.irradiance[ch] + 4 * r8.stderror[ch], 0.7 * exact);
+  }
+  BakeOptions probe = o;
+  probe.samplesPerProbe = 4096;
+  const ShRgb sh = bakeProbes(tracer, {glm::dvec3(0.0)}, probe)[0];
+  for (const glm::vec3& dir : {glm::vec3(0, 1, 0), glm::vec3(1, 0, 0), glm::vec3(0, 0, -1)}) {
+    const glm::vec3 e = shIrradiance(sh, dir);
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(e[ch], kPi * le[ch] / (1.0 - a), 0.06 * kPi * le[ch] / (1 - a));
+  }
+}
+
 // Probe and oracle agree: the irradiance reconstructed from a baked probe just above a sky-lit ground plane
 // matches the reference at the point below it (L2 is exact for this smooth, low-frequency field up to the
 // ringing bound; tolerance 3 % + 4 sigma).

@@ -1,6 +1,8 @@
 // Command-line option parsing with generated --help.
 #include "args.h"
 
+#include "tetraprobe/bake/bake.h"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -85,6 +87,14 @@ int Args::integer(const std::string& name) const {
   if (v != std::floor(v) || std::abs(v) > 2e9)
     throw UsageError(name + ": '" + str(name) + "' is not an integer");
   return int(v);
+}
+
+int Args::bounces(const std::string& name) const {
+  if (str(name) == "unbounded") return kUnboundedBounces;
+  const int v = integer(name);
+  if (v < 0 || v > 1000)
+    throw UsageError(name + " must be 'unbounded' or in [0, 1000], not '" + str(name) + "'");
+  return v;
 }
 
 glm::vec3 Args::vec3(const std::string& name) const {

@@ -40,6 +40,8 @@ class Args {
   std::string str(const std::string& name) const;  // value or default
   double number(const std::string& name) const;
   int integer(const std::string& name) const;
+  // Path depth: "unbounded" (kUnboundedBounces: Russian roulette only) or an integer in [0, 1000].
+  int bounces(const std::string& name) const;
   glm::vec3 vec3(const std::string& name) const;  // "x,y,z"
   void printHelp() const;
 

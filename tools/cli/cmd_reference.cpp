@@ -83,7 +83,8 @@ int cmdReference(int argc, char** argv) {
             {{"--points", "", "FILE.csv", "points to evaluate (x,y,z,nx,ny,nz a line)", ""},
              {"--rel-error", "", "E", "target relative standard error of the luminance", "0.01"},
              {"--max-samples", "", "N", "sample cap per point", "65536"},
-             {"--bounces", "", "N", "path depth (ground truth, independent of any bake)", "8"},
+             {"--bounces", "", "N|unbounded",
+              "path depth; unbounded = Russian roulette only (unbiased ground truth)", "unbounded"},
              {"--content", "", "default|all", "light content, as for bake", "default"},
              {"--seed", "", "N", "random seed", "1"},
              {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
@@ -94,11 +95,10 @@ int cmdReference(int argc, char** argv) {
   const int maxSamples = args.integer("--max-samples");
   const int threads = args.integer("--threads");
   BakeOptions bake;
-  bake.bounces = args.integer("--bounces");
+  bake.bounces = args.bounces("--bounces");
   bake.progress = false;
   if (!(relError >= 0.0)) throw UsageError("--rel-error must be >= 0");
   if (maxSamples < 1) throw UsageError("--max-samples must be at least 1");
-  if (bake.bounces < 0 || bake.bounces > 64) throw UsageError("--bounces must be in [0, 64]");
   if (threads < 0) throw UsageError("--threads must be >= 0");
   const std::string content = args.str("--content");
   if (content == "default")

@@ -15,9 +15,23 @@
 
 namespace tetraprobe {
 
+// Path depth meaning "unbounded": paths end by Russian roulette only (survival probability = the largest
+// throughput channel, from the third vertex on), so the estimate is unbiased. The cap only bounds a path in a
+// closed box of albedo exactly 1; at albedo 0.99 a path reaches it with probability 0.99^(2^20) = 0.
+inline constexpr int kUnboundedBounces = 1 << 20;
+
 struct BakeOptions {
-  int bounces = 2;                      // diffuse bounces after the first hit (0 = direct light only)
-  int samplesPerProbe = 256;            // paths per probe
+  int bounces = kUnboundedBounces;  // diffuse bounces after the first hit (0 = direct light only)
+  int samplesPerProbe = 256;        // paths per probe (adaptive: the minimum, rounded up to batches)
+  // Adaptive sampling (targetRelError > 0): a probe takes batches of kBakeBatchSize paths, each batch a
+  // spherical Fibonacci set under its own random rotation (independent replicates of a randomised-QMC
+  // estimate), until the standard error of its irradiance is at most targetRelError x its mean: the largest
+  // over the six axis normals n of stderr(Y(E(n))) over the batches, against the mean over those normals of
+  // Y(E(n)) (Y = Rec. 709 luminance), floored at kBakeErrorFloor x the median of that mean over all probes
+  // after the first samplesPerProbe paths (probes that see almost nothing stop there). At most
+  // maxSamplesPerProbe paths. 0 = exactly samplesPerProbe paths in one set (no error estimate).
+  double targetRelError = 0.0;
+  int maxSamplesPerProbe = 8192;
   int threads = 0;                      // 0 = all cores; never changes the result
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
@@ -26,15 +40,27 @@ struct BakeOptions {
 };
 
 // What a bake cost. Ray counts are summed per probe, so they are identical for any thread count.
+inline constexpr int kBakeBatchSize = 64;
+inline constexpr double kBakeErrorFloor = 1e-3;
+
 struct BakeStats {
   uint64_t intersectRays = 0;  // closest-hit queries (camera-less paths: one per path vertex)
   uint64_t occludedRays = 0;   // shadow (any-hit) queries: NEE of emissive triangles and punctual lights
   double seconds = 0.0;        // wall time of bakeProbes
+  uint64_t paths = 0;          // paths traced over all probes
+  int maxPathsPerProbe = 0;
+  // Adaptive sampling only (0 otherwise): the achieved relative standard error per probe (the quantity the
+  // target bounds), its mean, 95th percentile and maximum over probes, and the probes that stopped at the
+  // cap above the target.
+  double meanRelError = 0.0, p95RelError = 0.0, maxRelError = 0.0;
+  size_t probesAtCap = 0;
   uint64_t rays() const { return intersectRays + occludedRays; }
   double raysPerSecond() const { return seconds > 0.0 ? double(rays()) / seconds : 0.0; }
 };
 
-// Bakes one SH per probe (world-space positions). Deterministic for any `threads`.
+// Bakes one SH per probe (world-space positions). Deterministic for any `threads`. Adaptive sampling as
+// BakeOptions::targetRelError says (in two passes: every probe's first samplesPerProbe paths, then the rest
+// against the level-wide floor, so the result does not depend on the order probes are baked in).
 // Per probe: options.samplesPerProbe directions (bakeSphereDirections keyed by the seed and the probe index),
 // incident radiance L(d) by path tracing (options.bounces, options.content), projected with projectToSh.
 // With kContentDirectPunctual, each unshadowed point/spot light adds (I spot / r^2) Y(d) and each unshadowed
@@ -42,8 +68,8 @@ struct BakeStats {
 // Probes inside geometry are baked like any other (filter them with probesInsideGeometry).
 // options.shOrder 1 zeroes coefficients 4..8 after projection (0..3 are those of the L2 bake, bit for bit).
 // `stats`, when given, receives the ray counts and the wall time.
-// Throws InputError for samplesPerProbe < 1, bounces < 0, shOrder not 1 or 2, or a non-finite probe
-// position.
+// Throws InputError for samplesPerProbe < 1, bounces < 0, shOrder not 1 or 2, a negative or non-finite
+// targetRelError, maxSamplesPerProbe < samplesPerProbe (adaptive), or a non-finite probe position.
 std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
                               const BakeOptions& options, BakeStats* stats = nullptr);
 
@@ -104,6 +130,14 @@ struct SurfacePoint {
   glm::vec3 albedo{0.0f};
   uint32_t triangle = 0;
 };
+
+// Up to `count` points where a viewer looks: for each of `cameras` in turn (round robin), a uniformly random
+// position on its image plane (vertical field of view fovYDeg, width/height = `aspect`, the renderer's
+// lookAt/perspective frame), the primary ray's first front-face hit (back faces are culled, as the
+// renderer culls them) with its geometric normal. Misses (sky) are redrawn, at most 20 x count draws in all. Deterministic for a
+// given seed. Empty when `cameras` is empty.
+std::vector<SurfacePoint> sampleCameraPoints(const SceneTracer& tracer, const std::vector<Camera>& cameras,
+                                             int count, uint64_t seed, float aspect = 16.0f / 9.0f);
 
 // `count` random points on the scene's surfaces, area-weighted, each on a side that faces open space
 // (points whose both sides are enclosed are skipped and redrawn). Deterministic for a given seed.

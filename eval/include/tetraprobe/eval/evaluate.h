@@ -9,6 +9,9 @@
 //   there)
 //   leak_indirect  = the same mean over the points lit only indirectly (direct light below 1 % of r: the
 //   surfaces that see the light only through a door, where a leak shows)
+//   gross_error    = fraction of points with lum(x) > 2 lum(r) or lum(x) < lum(r) / 2 (off by more than 2x
+//   either way), luminances floored at 0.01 W/m^2 so two near-black values agree
+//   dark_holes     = fraction of points with lum(x) < 0.25 lum(r) (the same floor): black and dim polygons
 // The 0.01 W/m^2 floor keeps near-black points from dominating; it is ~1e-4 of a lit room's irradiance.
 #pragma once
 
@@ -29,10 +32,18 @@ namespace tetraprobe {
 // A point is "lit only indirectly" when less than this fraction of its reference comes directly.
 inline constexpr double kIndirectOnlyFraction = 0.01;
 
+// Where the points are drawn.
+enum class EvalSampling {
+  kArea,     // area-uniform on the surfaces, each on its open side (sampleSurfacePoints)
+  kCameras,  // where the scene's cameras look (sampleCameraPoints): the surfaces a viewer sees
+};
+
 struct EvalOptions {
-  int points = 512;            // surface points
-  int samplesPerPoint = 4096;  // reference paths per point
-  int referenceBounces = 8;    // reference path depth (converged ground truth, not the bake's depth)
+  int points = 512;                          // surface points
+  int samplesPerPoint = 4096;                // reference paths per point
+  int referenceBounces = kUnboundedBounces;  // reference depth: unbounded (Russian roulette only, unbiased)
+  EvalSampling sampling = EvalSampling::kArea;
+  std::vector<Camera> cameras;  // kCameras: the views to draw points from (must not be empty)
   uint64_t seed = 0x5eed0e7a1ull;
   int threads = 0;
   bool progress = true;
@@ -45,6 +56,8 @@ struct MethodResult {
   double p95RelError = 0.0;
   double leak = 0.0;
   double leakIndirect = 0.0;      // leak over the points lit only indirectly (EvalPoint::indirectOnly)
+  double grossError = 0.0;        // fraction of points off by more than 2x either way (luminance)
+  double darkHoles = 0.0;         // fraction of points below 0.25x the reference (luminance)
   double cpuNsPerQuery = 0.0;     // single thread, median of repeated timed passes over all points
   uint64_t bytes = 0;             // data the method needs at run time
   std::vector<glm::vec3> values;  // per-point lookups (same order as EvalReport::points)
@@ -58,11 +71,11 @@ struct EvalPoint {
 };
 
 struct EvalReport {
+  EvalSampling sampling = EvalSampling::kArea;
   int samplesPerPoint = 0;
   int referenceBounces = 0;
   double meanRelStderr = 0.0;
-  size_t indirectOnlyPoints =
-      0;  // points lit only indirectly (EvalPoint::indirectOnly)  // mean over points of stderror/ sqrt(r^2 + 0.01), luminance
+  size_t indirectOnlyPoints = 0;  // points lit only indirectly (EvalPoint::indirectOnly)
   double referenceSeconds = 0.0;
   std::vector<EvalPoint> points;
   std::vector<MethodResult> methods;
@@ -75,7 +88,12 @@ struct LookupMethod {
   std::function<glm::vec3(const glm::dvec3&, const glm::vec3&)> lookup;
 };
 
-// Draws the points and their references (content = the level's content) once.
+// "area" or "cameras".
+const char* evalSamplingName(EvalSampling sampling);
+
+// Draws the points (options.sampling) and their references (content = the level's content) once.
+// meanRelStderr = mean over points of stderror / sqrt(r^2 + 0.01), luminance. Throws InputError for
+// kCameras without cameras.
 EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options);
 
 // Scores one method against the report's references and appends it to report.methods.
@@ -85,6 +103,11 @@ void scoreMethod(EvalReport& report, const LookupMethod& method);
 // `tet (no occlusion)` (only for a level storing occlusion: ProbeQuery with it disabled) and `nearest`
 // (nearest probe's SH).
 std::vector<LookupMethod> standardMethods(const Level& level);
+
+// Per point of `report`, the share of the all-occluded fallback in the `tet` answer (applyOcclusion's
+// `fallback`, occlusion.h): 0 where the point sees some of its tet's probes, 1 where it sees none. All zero for
+// a level without occlusion. For diagnosing dark polygons.
+std::vector<float> fallbackShares(const Level& level, const EvalReport& report);
 
 // `tet+occlusion`: the tet lookup with per-tet occlusion data (runtime/occlusion.h) dropping occluded probes.
 // Points outside the tets (outer cells, empty level) take the plain tet answer.
