@@ -355,3 +355,88 @@ TEST_F(Cli, ReferenceIsDeterministicAcrossThreadCounts) {
         << line;
   EXPECT_GT(v[0][1], v[1][1]) << "floor facing the light vs ceiling facing down";
 }
+
+namespace {
+
+// Two sealed rooms split by a 0.1 m wall at x = 0: a bright ceiling panel on the left (x < 0), a dim one on
+// the right, and on the right a free-standing panel at x = 1.5 (|z| < 1) in front of the wall. Faces point
+// into the rooms; every box is closed.
+std::string wallSceneObj() {
+  std::ostringstream o;
+  int base = 0;
+  // A box [lo, hi] with faces pointing out of it (solid) or into it (room).
+  auto box = [&](double x0, double y0, double z0, double x1, double y1, double z1, const char* mtl,
+                 bool room) {
+    const double v[8][3] = {{x0, y0, z0}, {x1, y0, z0}, {x1, y1, z0}, {x0, y1, z0},
+                            {x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}};
+    o << "usemtl " << mtl << "\n";
+    for (const auto& p : v) o << "v " << p[0] << " " << p[1] << " " << p[2] << "\n";
+    const int f[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+    for (const auto& q : f) {
+      if (room)
+        o << "f " << base + q[3] + 1 << " " << base + q[2] + 1 << " " << base + q[1] + 1 << " "
+          << base + q[0] + 1 << "\n";
+      else
+        o << "f " << base + q[0] + 1 << " " << base + q[1] + 1 << " " << base + q[2] + 1 << " "
+          << base + q[3] + 1 << "\n";
+    }
+    base += 8;
+  };
+  o << "mtllib wall.mtl\n";
+  box(-4, 0, -4, 4, 4, 4, "white", true);          // the room
+  box(-0.05, 0, -4, 0.05, 4, 4, "white", false);   // the wall
+  box(1.5, 0, -1, 1.55, 4, 1, "white", false);     // the panel in front of the wall, right side
+  box(-3, 3.9, -1, -2, 3.95, 1, "bright", false);  // left light (its underside glows)
+  box(2, 3.9, -1, 3, 3.95, 1, "dim", false);       // right light
+  return o.str();
+}
+
+}  // namespace
+
+// Occlusion holes (occlusion_holes.h, the bake's --fill-holes): the point on the wall's right face at
+// (0.05, 2, 0) lies in a tet of three left-room probes and one right-room probe hidden behind the panel, so it
+// sees none of its four probes. Without filling, the lookup falls back to a probe of the far (bright) side;
+// with it, the bake adds a probe in the gap in front of the point and the point gets its own (dim) side's
+// light: within 2x of the path-traced reference there, and below a third of the far side's light.
+TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
+  write("wall.obj", wallSceneObj());
+  write("wall.mtl",
+        "newmtl white\nKd 0.7 0.7 0.7\nnewmtl bright\nKd 0 0 0\nKe 200 200 200\nnewmtl dim\nKd 0 0 0\nKe 5 5 "
+        "5\n");
+  write("probes.csv", "-1,1,-1\n-1,3,-1\n-1,2,1.5\n3,2,0\n");
+  write("point.csv", "0.05,2,0,1,0,0\n-0.05,2,0,-1,0,0\n");
+  const std::string common = path("wall.obj").string() + " --placement none --probes " +
+                             path("probes.csv").string() +
+                             " --occlusion shadow-maps --samples 512 --target-error 0 --threads 2";
+  ASSERT_EQ(run("bake " + common + " --fill-holes 0 -o " + path("before.tpb").string()).code, 0);
+  const CliRun after = run("bake " + common + " -o " + path("after.tpb").string());
+  ASSERT_EQ(after.code, 0) << after.err;
+  const size_t plus = after.out.find('+', after.out.find("holes"));
+  ASSERT_NE(plus, std::string::npos) << after.out;
+  EXPECT_NE(after.out[plus + 1], '0') << "the first round must add probes: " << after.out;
+
+  auto lum = [](const std::string& line) {
+    double r = 0, g = 0, b = 0;
+    std::sscanf(line.c_str(), "%lf,%lf,%lf", &r, &g, &b);
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+  };
+  const CliRun ref = run("reference " + path("wall.obj").string() + " --points " +
+                         path("point.csv").string() + " --rel-error 0.02");
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  std::istringstream lines(ref.out);
+  std::string own, far;
+  std::getline(lines, own);
+  std::getline(lines, far);
+  const double ownRef = lum(own), farRef = lum(far);
+  ASSERT_GT(farRef, 5.0 * ownRef) << "the far side must be much brighter for the test to tell them apart";
+  ASSERT_GT(ownRef, 0.0);
+
+  const CliRun before = run("query " + path("before.tpb").string() + " 0.05 2 0 1 0 0");
+  const CliRun filled = run("query " + path("after.tpb").string() + " 0.05 2 0 1 0 0");
+  ASSERT_EQ(before.code, 0);
+  ASSERT_EQ(filled.code, 0);
+  EXPECT_GT(lum(before.out), 2.0 * ownRef) << "precondition: without filling the point takes far-side light";
+  EXPECT_GT(lum(filled.out), 0.5 * ownRef) << filled.out;
+  EXPECT_LT(lum(filled.out), 2.0 * ownRef) << filled.out;
+  EXPECT_LT(lum(filled.out), farRef / 3.0) << filled.out;
+}

@@ -40,8 +40,14 @@ int cmdBake(int argc, char** argv) {
         "tetrahedralizer: CGAL Delaunay + circumcentre fillers at slivers, or TetGen Delaunay + quality "
         "refinement whose Steiner points become fillers",
         "cgal"},
-       {"--bounces", "", "N", "diffuse bounces after the first hit", "2"},
-       {"--samples", "", "N", "paths per probe", "256"},
+       {"--bounces", "", "N|unbounded",
+        "diffuse bounces after the first hit; unbounded = Russian roulette only (unbiased)", "unbounded"},
+       {"--samples", "", "N", "paths per probe: the minimum with --target-error, else exactly N", "256"},
+       {"--target-error", "", "E",
+        "adaptive sampling: each probe takes batches of 64 paths until the standard error of its irradiance "
+        "is at most E x its mean (0 = exactly --samples paths)",
+        "0.02"},
+       {"--max-samples", "", "N", "adaptive sampling: paths per probe at most", "8192"},
        {"--content", "", "default|all",
         "default: everything but light arriving directly from point/spot/sun lights (drawn in real "
         "time); all: that too",
@@ -62,6 +68,10 @@ int cmdBake(int argc, char** argv) {
         "auto"},
        {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
         "0.98"},
+       {"--fill-holes", "", "ROUNDS",
+        "rounds of occlusion-hole filling: surface points that see none of their tet's probes get a probe in "
+        "front of them, then tetrahedralize, bake and occlude again (0 = none)",
+        "3"},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
@@ -109,12 +119,17 @@ int cmdBake(int argc, char** argv) {
     if (!(opt.dering.strength >= 0.0 && opt.dering.strength <= kDeringMaxStrength))
       throw UsageError("--dering must be none, auto or a strength in [0, 2], not '" + dering + "'");
   }
-  opt.bake.bounces = args.integer("--bounces");
+  opt.bake.bounces = args.bounces("--bounces");
   opt.bake.samplesPerProbe = args.integer("--samples");
   opt.bake.threads = args.integer("--threads");
   opt.bake.seed = uint64_t(args.number("--seed"));
-  if (opt.bake.bounces < 0 || opt.bake.bounces > 64) throw UsageError("--bounces must be in [0, 64]");
   if (opt.bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
+  opt.bake.targetRelError = args.number("--target-error");
+  opt.bake.maxSamplesPerProbe = args.integer("--max-samples");
+  if (!(opt.bake.targetRelError >= 0.0) || !std::isfinite(opt.bake.targetRelError))
+    throw UsageError("--target-error must be a finite number >= 0");
+  if (opt.bake.targetRelError > 0.0 && opt.bake.maxSamplesPerProbe < opt.bake.samplesPerProbe)
+    throw UsageError("--max-samples must be at least --samples");
   if (opt.bake.threads < 0) throw UsageError("--threads must be >= 0");
   const std::string content = args.str("--content");
   if (content == "default")
@@ -128,6 +143,8 @@ int cmdBake(int argc, char** argv) {
     throw UsageError("--occlusion must be auto, none, planes or shadow-maps, not '" +
                      args.str("--occlusion") + "'");
   opt.occlusion.minAgreement = args.number("--min-agreement");
+  opt.holeRounds = args.integer("--fill-holes");
+  if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
 
@@ -172,9 +189,19 @@ int cmdBake(int argc, char** argv) {
                 level.probes.size(), opt.spacing, stats.gridProbes, stats.rejectedProbes);
   std::printf("  tets    %zu (%s), worst min dihedral %.3g deg (%.3g before fillers)\n", level.tets.size(),
               opt.tetra.c_str(), stats.minDihedral, stats.minDihedralBeforeFiller);
-  if (!stats.importedProbes)
-    std::printf("  rays    %llu (%.3g Mrays/s)\n", (unsigned long long)stats.bake.rays(),
-                stats.bake.raysPerSecond() * 1e-6);
+  if (!stats.importedProbes) {
+    std::printf("  rays    %llu (%.3g Mrays/s), %llu paths (%.0f per probe, at most %d)\n",
+                (unsigned long long)stats.bake.rays(), stats.bake.raysPerSecond() * 1e-6,
+                (unsigned long long)stats.bake.paths,
+                level.probes.empty() ? 0.0 : double(stats.bake.paths) / double(level.probes.size()),
+                stats.bake.maxPathsPerProbe);
+    if (opt.bake.targetRelError > 0.0)
+      std::printf(
+          "  noise   target %.3g: achieved relative stderr mean %.4f, p95 %.4f, max %.4f; %zu probes "
+          "above target at the cap\n",
+          opt.bake.targetRelError, stats.bake.meanRelError, stats.bake.p95RelError, stats.bake.maxRelError,
+          stats.bake.probesAtCap);
+  }
   std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
               opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
               stats.dering.minIrradianceAfter);
@@ -188,6 +215,12 @@ int cmdBake(int argc, char** argv) {
         stats.occlusion.agreement);
   else
     std::printf("  occl    none\n");
+  if (!stats.holeRounds.empty()) {
+    std::printf("  holes  ");
+    for (const auto& r : stats.holeRounds)
+      std::printf(" [%zu of %zu points see no probe: +%zu probes]", r.holes, r.checked, r.added);
+    std::printf("\n");
+  }
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
@@ -212,6 +245,8 @@ int cmdBake(int argc, char** argv) {
     j["options"] = {{"spacing", opt.spacing},
                     {"bounces", opt.bake.bounces},
                     {"samples", opt.bake.samplesPerProbe},
+                    {"target_error", opt.bake.targetRelError},
+                    {"max_samples", opt.bake.maxSamplesPerProbe},
                     {"content", content},
                     {"seed", opt.bake.seed},
                     {"placement", !opt.importShCsv.empty()  ? "imported"
@@ -224,7 +259,8 @@ int cmdBake(int argc, char** argv) {
                     {"sh_order", opt.bake.shOrder},
                     {"dering", dering},
                     {"occlusion", occlusionModeName(opt.occlusion.mode)},
-                    {"min_agreement", opt.occlusion.minAgreement}};
+                    {"min_agreement", opt.occlusion.minAgreement},
+                    {"fill_holes", opt.holeRounds}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},
@@ -254,6 +290,14 @@ int cmdBake(int argc, char** argv) {
                  {"occluded_rays", stats.bake.occludedRays},
                  {"seconds", stats.bake.seconds},
                  {"rays_per_s", stats.bake.raysPerSecond()},
+                 {"paths", stats.bake.paths},
+                 {"max_paths_per_probe", stats.bake.maxPathsPerProbe},
+                 {"noise",
+                  {{"target", opt.bake.targetRelError},
+                   {"mean_rel_stderr", stats.bake.meanRelError},
+                   {"p95_rel_stderr", stats.bake.p95RelError},
+                   {"max_rel_stderr", stats.bake.maxRelError},
+                   {"probes_above_target", stats.bake.probesAtCap}}},
                  {"imported", stats.importedProbes > 0}};
     j["occlusion"] = {{"mode", occlusionModeName(opt.occlusion.mode)},
                       {"none", level.occlusion.empty() ? level.tets.size() : stats.occlusion.none},
@@ -262,6 +306,10 @@ int cmdBake(int argc, char** argv) {
                       {"tets_with_geometry", stats.occlusion.tetsWithGeometry},
                       {"bytes", level.occlusion.bytes()},
                       {"agreement", stats.occlusion.agreement}};
+    nlohmann::json rounds = nlohmann::json::array();
+    for (const auto& r : stats.holeRounds)
+      rounds.push_back({{"points_checked", r.checked}, {"hole_points", r.holes}, {"probes_added", r.added}});
+    j["holes"] = {{"rounds", rounds}, {"probes_added", stats.holeProbes}};
     j["locate"] = {{"cell_size_m", grid.cellSize},
                    {"cells", gridCells},
                    {"hash_slots", grid.slots.size()},

@@ -60,7 +60,7 @@ int benchBake(int argc, char** argv) {
       "ratio = baker rays/s / bare Embree rays/s; the goal is >= 0.70.",
       {{"--probes", "", "N", "probes to bake", "256"},
        {"--samples", "", "N", "paths per probe", "256"},
-       {"--bounces", "", "N", "diffuse bounces after the first hit", "2"},
+       {"--bounces", "", "N|unbounded", "diffuse bounces after the first hit", "unbounded"},
        {"--content", "", "default|all", "light content, as for bake", "default"},
        {"--threads", "", "N", "worker threads for both measurements, 0 = all cores", "0"},
        {"--seed", "", "N", "random seed for probe positions and paths", "1"},
@@ -70,13 +70,12 @@ int benchBake(int argc, char** argv) {
   const int probeCount = args.integer("--probes");
   BakeOptions bake;
   bake.samplesPerProbe = args.integer("--samples");
-  bake.bounces = args.integer("--bounces");
+  bake.bounces = args.bounces("--bounces");
   bake.threads = args.integer("--threads");
   bake.seed = uint64_t(args.number("--seed"));
   bake.progress = false;
   if (probeCount < 1) throw UsageError("--probes must be at least 1");
   if (bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
-  if (bake.bounces < 0 || bake.bounces > 64) throw UsageError("--bounces must be in [0, 64]");
   if (bake.threads < 0) throw UsageError("--threads must be >= 0");
   const std::string content = args.str("--content");
   if (content == "default")

@@ -14,9 +14,11 @@
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/tetra/filler.h"
 #include "tetraprobe/tetra/placement.h"
+#include "tetraprobe/tetra/quality.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
 namespace tetraprobe::cli {
@@ -262,13 +264,60 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   stats.dering = deringProbes(level.sh, dering);
   timer.mark("dering");
 
-  if (options.occlusion.mode != OcclusionMode::kNone) {
+  auto occlude = [&] {
     OcclusionOptions occ = options.occlusion;
     occ.threads = options.bake.threads;
     occ.progress = options.bake.progress;
     occ.visibilitySource = dilatedFrom;
+    if (!occ.visibilitySource.empty()) occ.visibilitySource.resize(level.probes.size());
+    for (size_t i = dilatedFrom.size(); i < occ.visibilitySource.size(); ++i)
+      occ.visibilitySource[i] = uint32_t(i);
+    stats.occlusion = OcclusionStats{};
+    level.occlusion = LevelOcclusion{};
     level.occlusion = buildOcclusion(tracer, level, occ, &stats.occlusion);
+  };
+  if (options.occlusion.mode != OcclusionMode::kNone) {
+    occlude();
     timer.mark("occlusion");
+  }
+
+  // Occlusion holes: probes where a surface point sees none of its tet's probes (occlusion_holes.h). New
+  // probes are appended (earlier probes keep their index, so their SH and seeds), baked with a seed of their
+  // own round, and the whole level is tetrahedralized and occluded again.
+  if (options.holeRounds > 0 && options.occlusion.mode != OcclusionMode::kNone &&
+      options.importShCsv.empty()) {
+    for (int round = 0; round < options.holeRounds; ++round) {
+      OcclusionHoleOptions ho;
+      ho.spacing = options.spacing;
+      ho.seed = options.bake.seed ^ (0x401e5ull + uint64_t(round));
+      const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
+      stats.holeRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size()});
+      if (holes.probes.empty()) break;
+      probes.insert(probes.end(), holes.probes.begin(), holes.probes.end());
+      stats.holeProbes += holes.probes.size();
+      const TetMesh grown =
+          options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
+      const MeshQuality q = meshQuality(probes, grown);
+      stats.minDihedral = q.worstMinDihedralDeg;
+      stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
+      for (const glm::dvec3& p : holes.probes) level.probes.push_back(glm::vec3(p - level.origin));
+      level.tets = buildTetRecords(probes, grown, level.origin);
+      level.outerCells = buildOuterCells(level.probes, level.tets);
+      level.cellGrid = buildCellGrid(level.probes, level.tets);
+      BakeOptions bake = options.bake;
+      bake.seed = options.bake.seed ^ (0xb01e5ull + uint64_t(round) * 0x9e3779b97f4a7c15ull);
+      BakeStats added;
+      std::vector<ShRgb> sh = bakeProbes(tracer, holes.probes, bake, &added);
+      stats.bake.intersectRays += added.intersectRays;
+      stats.bake.occludedRays += added.occludedRays;
+      stats.bake.paths += added.paths;
+      stats.bake.seconds += added.seconds;
+      stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, added.maxPathsPerProbe);
+      deringProbes(sh, dering);
+      level.sh.insert(level.sh.end(), sh.begin(), sh.end());
+      occlude();
+    }
+    timer.mark("holes");
   }
 
   std::ostringstream gen;
@@ -281,9 +330,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
           : options.shellSpacing < 0.0 ? options.spacing
                                        : options.shellSpacing)
       << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
+      << "; target_error=" << options.bake.targetRelError
+      << "; max_samples=" << options.bake.maxSamplesPerProbe
       << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
       << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)
-      << "; occlusion=" << occlusionModeName(options.occlusion.mode);
+      << "; occlusion=" << occlusionModeName(options.occlusion.mode)
+      << "; hole_rounds=" << options.holeRounds;
   if (options.occlusion.mode == OcclusionMode::kAuto)
     gen << "; min_agreement=" << options.occlusion.minAgreement;
   level.generator = gen.str();

@@ -34,6 +34,10 @@ struct PipelineOptions {
   // Per-tet occlusion against light leaking, built after the SH bake and stored in the level
   // (occlusion/build_occlusion.h). occlusion.mode kNone stores nothing; threads and progress follow `bake`.
   OcclusionOptions occlusion;
+  // Rounds of occlusion-hole filling (occlusion/occlusion_holes.h) after the occlusion stage: surface points
+  // that see none of their tet's probes get a probe in front of them, then the level is tetrahedralized,
+  // baked (new probes only) and occluded again. 0 = none; needs occlusion. Not for imported SH.
+  int holeRounds = 3;
 };
 
 struct PipelineStats {
@@ -54,6 +58,14 @@ struct PipelineStats {
   size_t mergedProbes = 0;   // dropped as near-coincident (tolerance 0.1 x local spacing)
   double minDihedralBeforeFiller = 0.0, minDihedral = 0.0;  // worst tet, degrees
   std::vector<uint64_t> dihedralHistogram;                  // tets per 5-degree bin of min dihedral
+
+  // Occlusion-hole filling, per round: surface points checked, points seeing none of their probes, probes
+  // added; and after the last round, the points still falling back (measured on a fresh draw).
+  struct HoleRound {
+    size_t checked = 0, holes = 0, added = 0;
+  };
+  std::vector<HoleRound> holeRounds;
+  size_t holeProbes = 0;
 
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };

@@ -1,0 +1,115 @@
+// Occlusion holes (occlusion_holes.h): where the stored per-tet occlusion leaves a surface point no visible
+// probe, the lookup's only answer is a fallback. Rather than guess at run time, the bake puts a probe where
+// the point can see it: in front of the surface, at most half a spacing out and half the free distance
+// along the normal, so it stays on the point's side of any nearby geometry. The next tetrahedralization then
+// gives the point a tet with a visible vertex; the pipeline repeats this a few rounds.
+#include "tetraprobe/occlusion/occlusion_holes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <glm/geometric.hpp>
+
+#include "tetraprobe/bake/bake.h"
+#include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/occlusion.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+
+namespace {
+
+struct CellHash {
+  size_t operator()(const glm::i64vec3& c) const {
+    uint64_t h = uint64_t(c.x) * 0x9e3779b97f4a7c15ull;
+    h ^= uint64_t(c.y) * 0xc2b2ae3d27d4eb4full + (h << 6) + (h >> 2);
+    h ^= uint64_t(c.z) * 0x165667b19e3779f9ull + (h << 6) + (h >> 2);
+    return size_t(h);
+  }
+};
+
+glm::i64vec3 cellOf(const glm::dvec3& p, double size) {
+  return glm::i64vec3(glm::floor(p / size));
+}
+
+// Points within `radius` of each other, on a grid of cell `radius`.
+class NearGrid {
+ public:
+  explicit NearGrid(double radius) : r_(radius) {}
+  void add(const glm::dvec3& p) { cells_[cellOf(p, r_)].push_back(p); }
+  bool near(const glm::dvec3& p) const {
+    const glm::i64vec3 c = cellOf(p, r_);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = cells_.find(c + glm::i64vec3(dx, dy, dz));
+          if (it == cells_.end()) continue;
+          for (const glm::dvec3& q : it->second)
+            if (glm::length(q - p) < r_) return true;
+        }
+    return false;
+  }
+
+ private:
+  double r_;
+  std::unordered_map<glm::i64vec3, std::vector<glm::dvec3>, CellHash> cells_;
+};
+
+double surfaceArea(const Scene& scene) {
+  double area = 0.0;
+  for (const glm::uvec3& t : scene.triangles) {
+    const glm::dvec3 a(scene.positions[t.x]), b(scene.positions[t.y]), c(scene.positions[t.z]);
+    area += 0.5 * glm::length(glm::cross(b - a, c - a));
+  }
+  return area;
+}
+
+}  // namespace
+
+OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
+                                  const OcclusionHoleOptions& options) {
+  if (!(options.spacing > 0.0) || !std::isfinite(options.spacing))
+    throw InputError("occlusion holes: spacing must be positive and finite");
+  OcclusionHoles out;
+  if (level.occlusion.empty() || level.tets.empty()) return out;
+  const double density = options.pointsPerSquareMetre / (options.spacing * options.spacing);
+  const double wanted = std::clamp(surfaceArea(tracer.scene()) * density, double(options.minPoints),
+                                   double(std::max(options.minPoints, options.maxPoints)));
+  const std::vector<SurfacePoint> points = sampleSurfacePoints(tracer, int(wanted), options.seed);
+  out.pointsChecked = points.size();
+
+  const ProbeQuery query(level);
+  NearGrid existing(options.spacing / 10.0);
+  for (const glm::vec3& p : level.probes) existing.add(glm::dvec3(p) + level.origin);
+  std::unordered_set<glm::i64vec3, CellHash> taken;
+  const float eps = tracer.rayEpsilon();
+  FlushDenormalsScope ftz;
+  for (const SurfacePoint& sp : points) {
+    const Location loc = query.locate(sp.position);
+    if (loc.tet < 0) continue;
+    const glm::vec3 local(sp.position - level.origin);
+    float fallback = 0.0f;
+    applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, sp.normal),
+                   &fallback);
+    if (!(fallback > 0.0f)) continue;
+    ++out.holePoints;
+    const glm::vec3 n = glm::normalize(sp.normal);
+    const Hit hit =
+        tracer.intersect(glm::vec3(sp.position) + n * eps, n, 0.0f, std::numeric_limits<float>::infinity());
+    const double free = hit.hit ? double(hit.t) : std::numeric_limits<double>::infinity();
+    const double d = std::min(options.spacing / 2.0, free / 2.0);
+    if (d < options.spacing / 50.0) continue;
+    const glm::dvec3 probe = sp.position + glm::dvec3(n) * d;
+    if (!taken.insert(cellOf(probe, options.spacing / 2.0)).second) continue;
+    if (existing.near(probe)) continue;
+    existing.add(probe);
+    out.probes.push_back(probe);
+  }
+  return out;
+}
+
+}  // namespace tetraprobe
