@@ -676,7 +676,8 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
-// outer cell) outside it; a point that sees none blends into its dimmest probe (per channel). Mirrors
+// outer cell) outside it; a point that sees none blends into min(nearest-dominated blend, unoccluded blend)
+// per channel. Mirrors
 // ProbeQuery::irradiance and occludedIrradiance (runtime/occlusion.h).
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
@@ -689,14 +690,18 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   tetraprobeBlendSh(loc.tet, w, c);
   vec3 e = tetraprobeShIrradiance(c, normal);
   if (fallback > 0.0) {
-    vec3 dimmest = vec3(3.0e38);
-    for (int i = 0; i < 4; ++i) {
-      vec4 one = vec4(0.0);
-      one[i] = 1.0;
-      tetraprobeBlendSh(loc.tet, one, c);
-      dimmest = min(dimmest, tetraprobeShIrradiance(c, normal));
-    }
-    e = (1.0 - fallback) * e + fallback * dimmest;
+    float unused;
+    vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
+    vec4 p = u * u;
+    p = p * p;
+    p = p * p;
+    float ps = p.x + p.y + p.z + p.w;
+    p = ps > 0.0 ? p / ps : u;
+    tetraprobeBlendSh(loc.tet, p, c);
+    vec3 nearest = tetraprobeShIrradiance(c, normal);
+    tetraprobeBlendSh(loc.tet, u, c);
+    vec3 blend = tetraprobeShIrradiance(c, normal);
+    e = (1.0 - fallback) * e + fallback * min(nearest, blend);
   }
   return e;
 }

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -230,8 +231,12 @@ void addDeltaToSh(ShRgb& sh, const glm::vec3& dir, const glm::vec3& irradiance) 
 }
 
 std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
-                              const BakeOptions& options, BakeStats* stats) {
+                              const BakeOptions& options, BakeStats* stats,
+                              const std::vector<uint8_t>* skip) {
   validateBakeOptions(options);
+  if (skip && skip->size() != probes.size())
+    throw std::invalid_argument("bakeProbes: skip mask size differs from the probe count");
+  auto skipped = [&](size_t i) { return skip != nullptr && (*skip)[i] != 0; };
   for (size_t i = 0; i < probes.size(); ++i)
     if (!std::isfinite(probes[i].x) || !std::isfinite(probes[i].y) || !std::isfinite(probes[i].z))
       throw InputError("bake: probe " + std::to_string(i) + " has a non-finite position");
@@ -245,6 +250,11 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
   if (!adaptive) {
     if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
     parallelFor(probes.size(), options.threads, [&](size_t i) {
+      if (skipped(i)) {
+        paths[i] = 0;
+        if (progress) progress->advance();
+        return;
+      }
       if (stats) {
         RayTapScope scope(taps[i]);
         out[i] = bakeProbe(tracer, glm::vec3(probes[i]), i, options);
@@ -268,15 +278,17 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     // Pass 1: every probe's minimum; then the floor from the level's median; pass 2: each probe to its target.
     if (options.progress) progress = std::make_unique<Progress>("bake (pass 1)", probes.size(), "probes");
     parallelFor(probes.size(), options.threads, [&](size_t i) {
-      run(i, [&] {
-        DenormalScope denormals;
-        while (state[i].batches < minBatches) addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
-      });
+      if (!skipped(i))
+        run(i, [&] {
+          DenormalScope denormals;
+          while (state[i].batches < minBatches) addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+        });
       if (progress) progress->advance();
     });
     if (progress) progress->finish();
-    std::vector<double> means(probes.size());
-    for (size_t i = 0; i < probes.size(); ++i) means[i] = std::abs(adaptiveMean(state[i]));
+    std::vector<double> means;
+    for (size_t i = 0; i < probes.size(); ++i)
+      if (!skipped(i)) means.push_back(std::abs(adaptiveMean(state[i])));
     double median = 0.0;
     if (!means.empty()) {
       std::nth_element(means.begin(), means.begin() + long(means.size() / 2), means.end());
@@ -284,8 +296,13 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     }
     const double floor = kBakeErrorFloor * median;
     if (options.progress) progress = std::make_unique<Progress>("bake (to target)", probes.size(), "probes");
-    achieved.resize(probes.size());
+    achieved.assign(probes.size(), -1.0);
     parallelFor(probes.size(), options.threads, [&](size_t i) {
+      if (skipped(i)) {
+        paths[i] = 0;
+        if (progress) progress->advance();
+        return;
+      }
       run(i, [&] {
         DenormalScope denormals;
         AdaptiveProbe& st = state[i];
@@ -310,6 +327,7 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
       stats->paths += uint64_t(n);
       stats->maxPathsPerProbe = std::max(stats->maxPathsPerProbe, n);
     }
+    achieved.erase(std::remove(achieved.begin(), achieved.end(), -1.0), achieved.end());
     if (!achieved.empty()) {
       std::vector<double> sorted = achieved;
       std::sort(sorted.begin(), sorted.end());

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include <glm/geometric.hpp>
@@ -209,13 +210,21 @@ glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weig
   float wf[4] = {w.x, w.y, w.z, w.w};
   const glm::vec3 visible = shIrradiance(shBlend(probes, wf, 4), normal);
   if (!(f > 0.0f)) return visible;
-  glm::vec3 dimmest(std::numeric_limits<float>::infinity());
-  for (int i = 0; i < 4; ++i) {
-    const ShRgb* one[1] = {probes[i]};
-    const float unit[1] = {1.0f};
-    dimmest = glm::min(dimmest, shIrradiance(shBlend(one, unit, 1), normal));
-  }
-  return (1.0f - f) * visible + f * dimmest;
+  // The unoccluded weights u, and their 8th powers renormalized: a blend dominated by the nearest probe
+  // (the largest weight), continuous where two weights tie.
+  const glm::vec4 u = applyOcclusion(weights, glm::vec4(1.0f));
+  glm::vec4 p = u * u;
+  p = p * p;
+  p = p * p;
+  const float ps = p.x + p.y + p.z + p.w;
+  if (ps > 0.0f)
+    p /= ps;
+  else
+    p = u;
+  float uf[4] = {u.x, u.y, u.z, u.w}, pf[4] = {p.x, p.y, p.z, p.w};
+  const glm::vec3 nearest = shIrradiance(shBlend(probes, pf, 4), normal);
+  const glm::vec3 blend = shIrradiance(shBlend(probes, uf, 4), normal);
+  return (1.0f - f) * visible + f * glm::min(nearest, blend);
 }
 
 }  // namespace tetraprobe

@@ -700,7 +700,7 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
   // Outside the hull the outer cell's weights sit on its hull tet's probes; that tet's occlusion still tells
   // which of them the point can see (a wall cutting the tet usually extends past the hull), so it applies
   // too.
-  // A point that sees none of its probes blends into the dimmest of them (occludedIrradiance).
+  // A point that sees none of its probes blends into its fallback (occludedIrradiance).
   if (usesOcclusion()) {
     const glm::vec3 local(world - level_.origin);
     const glm::vec4 vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);

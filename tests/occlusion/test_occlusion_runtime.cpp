@@ -169,9 +169,11 @@ TEST(OcclusionRuntime, ApplyOcclusionNeverNaNAndSumsToOne) {
   EXPECT_NEAR(fBelow, 0.001f, 1e-4f);
 }
 
-// The run-time answer: visible probes interpolate; a point that sees none gets its dimmest probe (per
-// channel), not the unoccluded blend; in between the two blend continuously.
-TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheDimmestProbe) {
+// The run-time answer: visible probes interpolate; a point that sees none gets the blend dominated by its
+// nearest probe (weights^8, renormalized), capped per channel by the unoccluded blend -- not the dimmest probe
+// (often across the wall: the dark polygons) and not the unoccluded blend (a leak of the brightest); in
+// between the two blend continuously. And where two weights tie the fallback is continuous too.
+TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheNearestProbeCappedByTheBlend) {
   ShRgb sh[4];
   const float dc[4][3] = {{8.0f, 1.0f, 3.0f}, {2.0f, 4.0f, 3.0f}, {5.0f, 5.0f, 0.5f}, {9.0f, 9.0f, 9.0f}};
   for (int i = 0; i < 4; ++i) sh[i].c[0] = glm::vec3(dc[i][0], dc[i][1], dc[i][2]);  // constant radiance
@@ -182,16 +184,32 @@ TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheDimmestProbe) {
     const float unit[1] = {1.0f};
     return shIrradiance(shBlend(one, unit, 1), n);
   };
+  auto blendOf = [&](const glm::vec4& w) { return w.x * e(0) + w.y * e(1) + w.z * e(2) + w.w * e(3); };
   const glm::vec4 w(0.1f, 0.2f, 0.3f, 0.4f);
   // Two visible: their renormalized blend.
   const glm::vec3 two = occludedIrradiance(probes, w, glm::vec4(1, 0, 1, 0), n);
   const glm::vec3 expectTwo = 0.25f * e(0) + 0.75f * e(2);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(two[c], expectTwo[c], 1e-5f * expectTwo[c]);
-  // None visible: the per-channel minimum of the four.
+  // None visible: min(nearest-dominated blend, unoccluded blend), per channel.
   const glm::vec3 none = occludedIrradiance(probes, w, glm::vec4(0.0f), n);
+  glm::vec4 p = w * w * w * w;
+  p = p * p;
+  p /= p.x + p.y + p.z + p.w;
+  const glm::vec3 expectNone = glm::min(blendOf(p), blendOf(w));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(none[c], expectNone[c], 1e-5f * expectNone[c]);
+  EXPECT_GT(p.w, 0.9f) << "the nearest probe (largest weight) dominates";
   const glm::vec3 dimmest = glm::min(glm::min(e(0), e(1)), glm::min(e(2), e(3)));
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(none[c], dimmest[c], 1e-6f);
-  EXPECT_LT(none.x, 0.5f * (0.1f * e(0).x + 0.2f * e(1).x + 0.3f * e(2).x + 0.4f * e(3).x));
+  EXPECT_GT(none.y, 2.0f * dimmest.y) << "not the dimmest probe";
+  EXPECT_LE(none.x, blendOf(w).x * (1.0f + 1e-6f)) << "never above the unoccluded blend";
+  // Continuous where the two largest weights tie (probe 2 overtakes probe 3): no jump in the fallback.
+  glm::vec3 prevTie = occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f, 0.35f), glm::vec4(0.0f), n);
+  for (int k = 1; k <= 200; ++k) {
+    const float t = 0.1f * float(k) / 200.0f;
+    const glm::vec3 cur =
+        occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f - t, 0.35f + t), glm::vec4(0.0f), n);
+    for (int c = 0; c < 3; ++c) ASSERT_LE(std::abs(cur[c] - prevTie[c]), 0.02f * e(3)[c]) << k;
+    prevTie = cur;
+  }
   // Continuous through the threshold: the answer moves smoothly from the fallback to the visible blend.
   glm::vec3 prev = none;
   for (int k = 1; k <= 400; ++k) {

@@ -42,8 +42,8 @@ int cmdBake(int argc, char** argv) {
         "cgal"},
        {"--bounces", "", "N|unbounded",
         "diffuse bounces after the first hit; unbounded = Russian roulette only (unbiased)", "unbounded"},
-       {"--samples", "", "N", "paths per probe: the minimum with --target-error, else exactly N", "256"},
-       {"--target-error", "", "E",
+       {"--samples", "", "N", "paths per probe: the minimum with --noise, else exactly N", "256"},
+       {"--noise", "", "E",
         "adaptive sampling: each probe takes batches of 64 paths until the standard error of its irradiance "
         "is at most E x its mean (0 = exactly --samples paths)",
         "0.02"},
@@ -71,7 +71,14 @@ int cmdBake(int argc, char** argv) {
        {"--fill-holes", "", "ROUNDS",
         "rounds of occlusion-hole filling: surface points that see none of their tet's probes get a probe in "
         "front of them, then tetrahedralize, bake and occlude again (0 = none)",
-        "3"},
+        "1"},
+       {"--probe-budget", "", "N|auto",
+        "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
+        "error against the path-traced oracle is largest; auto = 10 % of the placed probes (shell probes not "
+        "counted); 0 = none",
+        "0"},
+       {"--refine-points", "", "N",
+        "refinement: surface points the error is measured at (twice: select, check)", "2048"},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
@@ -124,10 +131,10 @@ int cmdBake(int argc, char** argv) {
   opt.bake.threads = args.integer("--threads");
   opt.bake.seed = uint64_t(args.number("--seed"));
   if (opt.bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
-  opt.bake.targetRelError = args.number("--target-error");
+  opt.bake.targetRelError = args.number("--noise");
   opt.bake.maxSamplesPerProbe = args.integer("--max-samples");
   if (!(opt.bake.targetRelError >= 0.0) || !std::isfinite(opt.bake.targetRelError))
-    throw UsageError("--target-error must be a finite number >= 0");
+    throw UsageError("--noise must be a finite number >= 0");
   if (opt.bake.targetRelError > 0.0 && opt.bake.maxSamplesPerProbe < opt.bake.samplesPerProbe)
     throw UsageError("--max-samples must be at least --samples");
   if (opt.bake.threads < 0) throw UsageError("--threads must be >= 0");
@@ -144,6 +151,10 @@ int cmdBake(int argc, char** argv) {
                      args.str("--occlusion") + "'");
   opt.occlusion.minAgreement = args.number("--min-agreement");
   opt.holeRounds = args.integer("--fill-holes");
+  opt.probeBudget = args.str("--probe-budget") == "auto" ? -1 : args.integer("--probe-budget");
+  opt.refinePoints = args.integer("--refine-points");
+  if (opt.probeBudget < -1) throw UsageError("--probe-budget must be auto or >= 0");
+  if (opt.refinePoints < 1) throw UsageError("--refine-points must be >= 1");
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
@@ -215,6 +226,12 @@ int cmdBake(int argc, char** argv) {
         stats.occlusion.agreement);
   else
     std::printf("  occl    none\n");
+  if (stats.refineBefore.points > 0)
+    std::printf(
+        "  refine  +%zu probes; error at %zu independent points: mean |log2| %.4f -> %.4f, gross %.4f -> "
+        "%.4f\n",
+        stats.refineProbes, stats.refineBefore.points, stats.refineBefore.meanLogError,
+        stats.refineAfter.meanLogError, stats.refineBefore.gross, stats.refineAfter.gross);
   if (!stats.holeRounds.empty()) {
     std::printf("  holes  ");
     for (const auto& r : stats.holeRounds)
@@ -260,7 +277,9 @@ int cmdBake(int argc, char** argv) {
                     {"dering", dering},
                     {"occlusion", occlusionModeName(opt.occlusion.mode)},
                     {"min_agreement", opt.occlusion.minAgreement},
-                    {"fill_holes", opt.holeRounds}};
+                    {"fill_holes", opt.holeRounds},
+                    {"probe_budget", opt.probeBudget},
+                    {"refine_points", opt.refinePoints}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},
@@ -310,6 +329,12 @@ int cmdBake(int argc, char** argv) {
     for (const auto& r : stats.holeRounds)
       rounds.push_back({{"points_checked", r.checked}, {"hole_points", r.holes}, {"probes_added", r.added}});
     j["holes"] = {{"rounds", rounds}, {"probes_added", stats.holeProbes}};
+    j["refine"] = {{"probes_added", stats.refineProbes},
+                   {"points", stats.refineBefore.points},
+                   {"mean_log2_error_before", stats.refineBefore.meanLogError},
+                   {"mean_log2_error_after", stats.refineAfter.meanLogError},
+                   {"gross_before", stats.refineBefore.gross},
+                   {"gross_after", stats.refineAfter.gross}};
     j["locate"] = {{"cell_size_m", grid.cellSize},
                    {"cells", gridCells},
                    {"hash_slots", grid.slots.size()},

@@ -14,6 +14,7 @@
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/eval/refine.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/tetra/filler.h"
@@ -196,6 +197,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     throw InputError(msg.str());
   }
 
+  std::vector<Clearance> shellClearance;  // of the shell probes, in `shell` order
   TetMesh mesh;
   if (voxelMesh) {
     mesh = std::move(*voxelMesh);  // tetrahedralized with the fillers
@@ -227,7 +229,16 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     truncateShOrder(level.sh, options.bake.shOrder);
     timer.mark("import");
   } else {
-    level.sh = bakeProbes(tracer, probes, options.bake, &stats.bake);
+    // Shell probes that fail the inside rule are dilated whatever they see: not traced.
+    std::vector<uint8_t> skip(probes.size(), 0);
+    if (!shell.empty()) {
+      std::vector<glm::dvec3> pts;
+      for (size_t i : shell) pts.push_back(probes[i]);
+      shellClearance = tracerClearance(tracer, options.bake.threads)(
+          pts, std::vector<double>(pts.size(), options.spacing));
+      for (size_t k = 0; k < shell.size(); ++k) skip[shell[k]] = shellClearance[k].inside ? 1 : 0;
+    }
+    level.sh = bakeProbes(tracer, probes, options.bake, &stats.bake, &skip);
     timer.mark("bake");
   }
   if (!shell.empty() && options.importShCsv.empty()) {
@@ -236,10 +247,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     // whose walls are closed boxes shows them front faces): either way they carry no light of their own
     // and take their nearest valid probe's SH. "Nothing lit": mean radiance (the SH's DC term, luminance)
     // at most 1e-3 of the median over the other probes.
-    std::vector<glm::dvec3> pts;
-    for (size_t i : shell) pts.push_back(probes[i]);
-    const std::vector<Clearance> c =
-        tracerClearance(tracer, options.bake.threads)(pts, std::vector<double>(pts.size(), options.spacing));
+    const std::vector<Clearance>& c = shellClearance;
     auto dc = [&](size_t i) {
       const glm::vec3 v = level.sh[i].c[0];
       return 0.2126 * double(v.r) + 0.7152 * double(v.g) + 0.0722 * double(v.b);
@@ -281,11 +289,36 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     timer.mark("occlusion");
   }
 
-  // Occlusion holes: probes where a surface point sees none of its tet's probes (occlusion_holes.h). New
-  // probes are appended (earlier probes keep their index, so their SH and seeds), baked with a seed of their
-  // own round, and the whole level is tetrahedralized and occluded again.
-  if (options.holeRounds > 0 && options.occlusion.mode != OcclusionMode::kNone &&
-      options.importShCsv.empty()) {
+  // Appends probes (earlier probes keep their index, so their SH and seeds), bakes them with a seed of their
+  // own, and tetrahedralizes and occludes the whole level again.
+  auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt) {
+    probes.insert(probes.end(), added.begin(), added.end());
+    const TetMesh grown =
+        options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
+    const MeshQuality q = meshQuality(probes, grown);
+    stats.minDihedral = q.worstMinDihedralDeg;
+    stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
+    for (const glm::dvec3& p : added) level.probes.push_back(glm::vec3(p - level.origin));
+    level.tets = buildTetRecords(probes, grown, level.origin);
+    level.outerCells = buildOuterCells(level.probes, level.tets);
+    level.cellGrid = buildCellGrid(level.probes, level.tets);
+    BakeOptions bake = options.bake;
+    bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
+    BakeStats more;
+    std::vector<ShRgb> sh = bakeProbes(tracer, added, bake, &more);
+    stats.bake.intersectRays += more.intersectRays;
+    stats.bake.occludedRays += more.occludedRays;
+    stats.bake.paths += more.paths;
+    stats.bake.seconds += more.seconds;
+    stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
+    deringProbes(sh, dering);
+    level.sh.insert(level.sh.end(), sh.begin(), sh.end());
+    if (options.occlusion.mode != OcclusionMode::kNone) occlude();
+  };
+  const bool baked = options.importShCsv.empty();
+
+  // Occlusion holes: probes where a surface point sees none of its tet's probes (occlusion_holes.h).
+  if (options.holeRounds > 0 && options.occlusion.mode != OcclusionMode::kNone && baked) {
     for (int round = 0; round < options.holeRounds; ++round) {
       OcclusionHoleOptions ho;
       ho.spacing = options.spacing;
@@ -293,31 +326,34 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
       stats.holeRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size()});
       if (holes.probes.empty()) break;
-      probes.insert(probes.end(), holes.probes.begin(), holes.probes.end());
       stats.holeProbes += holes.probes.size();
-      const TetMesh grown =
-          options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
-      const MeshQuality q = meshQuality(probes, grown);
-      stats.minDihedral = q.worstMinDihedralDeg;
-      stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
-      for (const glm::dvec3& p : holes.probes) level.probes.push_back(glm::vec3(p - level.origin));
-      level.tets = buildTetRecords(probes, grown, level.origin);
-      level.outerCells = buildOuterCells(level.probes, level.tets);
-      level.cellGrid = buildCellGrid(level.probes, level.tets);
-      BakeOptions bake = options.bake;
-      bake.seed = options.bake.seed ^ (0xb01e5ull + uint64_t(round) * 0x9e3779b97f4a7c15ull);
-      BakeStats added;
-      std::vector<ShRgb> sh = bakeProbes(tracer, holes.probes, bake, &added);
-      stats.bake.intersectRays += added.intersectRays;
-      stats.bake.occludedRays += added.occludedRays;
-      stats.bake.paths += added.paths;
-      stats.bake.seconds += added.seconds;
-      stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, added.maxPathsPerProbe);
-      deringProbes(sh, dering);
-      level.sh.insert(level.sh.end(), sh.begin(), sh.end());
-      occlude();
+      addProbes(holes.probes, 0xb01e5ull + uint64_t(round));
     }
     timer.mark("holes");
+  }
+
+  // Error-driven refinement (eval/refine.h): the lookup's error against the oracle at area-uniform surface
+  // points; probes in front of the worst, up to the budget; the error measured again on an independent draw.
+  const int budget =
+      options.probeBudget >= 0 ? options.probeBudget : int(0.1 * double(probes.size() - shell.size()));
+  if (budget > 0 && baked) {
+    RefineOptions ro;
+    ro.spacing = options.spacing;
+    ro.points = options.refinePoints;
+    ro.content = options.bake.content;
+    ro.threads = options.bake.threads;
+    ro.seed = options.bake.seed ^ 0x2ef1eull;
+    std::vector<RefinePoint> select = refinePoints(tracer, ro);
+    ro.seed = options.bake.seed ^ 0x7a11dull;
+    std::vector<RefinePoint> check = refinePoints(tracer, ro);
+    stats.refineBefore = scoreRefinePoints(level, check);
+    scoreRefinePoints(level, select);
+    const std::vector<glm::dvec3> added =
+        proposeRefinement(tracer, level, select, size_t(budget), options.spacing);
+    stats.refineProbes = added.size();
+    if (!added.empty()) addProbes(added, 0x2ef1eull);
+    stats.refineAfter = scoreRefinePoints(level, check);
+    timer.mark("refine");
   }
 
   std::ostringstream gen;

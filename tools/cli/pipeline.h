@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/eval/refine.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/scene/scene.h"
@@ -37,7 +38,12 @@ struct PipelineOptions {
   // Rounds of occlusion-hole filling (occlusion/occlusion_holes.h) after the occlusion stage: surface points
   // that see none of their tet's probes get a probe in front of them, then the level is tetrahedralized,
   // baked (new probes only) and occluded again. 0 = none; needs occlusion. Not for imported SH.
-  int holeRounds = 3;
+  int holeRounds = 1;
+  // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
+  // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 = 10 %
+  // of the probes that are not shell probes.
+  int probeBudget = 0;
+  int refinePoints = 2048;
 };
 
 struct PipelineStats {
@@ -66,6 +72,9 @@ struct PipelineStats {
   };
   std::vector<HoleRound> holeRounds;
   size_t holeProbes = 0;
+  // Error-driven refinement: probes added, and the error at an independent draw of points before and after.
+  size_t refineProbes = 0;
+  ErrorEstimate refineBefore, refineAfter;
 
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };

@@ -70,8 +70,12 @@ struct BakeStats {
 // `stats`, when given, receives the ray counts and the wall time.
 // Throws InputError for samplesPerProbe < 1, bounces < 0, shOrder not 1 or 2, a negative or non-finite
 // targetRelError, maxSamplesPerProbe < samplesPerProbe (adaptive), or a non-finite probe position.
+// `skip` (optional, one entry per probe): probes with skip[i] != 0 are not traced and get zero SH (for probes
+// whose SH is replaced anyway, e.g. shell probes behind walls that will be dilated); they take no part in the
+// adaptive floor's median. std::invalid_argument when its size differs.
 std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
-                              const BakeOptions& options, BakeStats* stats = nullptr);
+                              const BakeOptions& options, BakeStats* stats = nullptr,
+                              const std::vector<uint8_t>* skip = nullptr);
 
 // Sets coefficients 4..8 to exactly zero (an L1 probe, runtime/sh.h) when order == 1; no-op for order 2.
 void truncateShOrder(std::vector<ShRgb>& sh, int order);
