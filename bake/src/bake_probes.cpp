@@ -61,7 +61,8 @@ void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh)
   for (const Light& l : tracer.scene().lights) {
     if (l.type == LightType::kDirectional) {
       const glm::vec3 w = -glm::normalize(l.direction);
-      if (!tracer.occluded(probe, w, 0.0f, kInfinity)) addDeltaToSh(sh, w, l.intensity);
+      const float through = tracer.transmittance(probe, w, 0.0f, kInfinity);
+      if (through > 0.0f) addDeltaToSh(sh, w, through < 1.0f ? l.intensity * through : l.intensity);
       continue;
     }
     const glm::vec3 d = l.position - probe;
@@ -71,8 +72,9 @@ void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh)
     const glm::vec3 w = d / dist;
     const float spot = spotFactor(l, -w);
     if (spot <= 0.0f) continue;
-    if (dist > eps && tracer.occluded(probe, w, 0.0f, dist - eps)) continue;
-    addDeltaToSh(sh, w, l.intensity * (spot / r2));
+    const float through = dist > eps ? tracer.transmittance(probe, w, 0.0f, dist - eps) : 1.0f;
+    if (through <= 0.0f) continue;
+    addDeltaToSh(sh, w, through < 1.0f ? l.intensity * (spot / r2 * through) : l.intensity * (spot / r2));
   }
 }
 

@@ -1,6 +1,7 @@
 // Inside-geometry test for probes: a point is inside when more than a fraction of rays cast uniformly over
 // the sphere meet back faces (the Unity Adaptive Probe Volumes validity rule, 25 %). Rays that escape count
-// as not back-face. Directions are a spherical Fibonacci set under a per-point random rotation.
+// as not back-face. Directions are a spherical Fibonacci set under a per-point random rotation. Only opaque
+// surfaces count: a transmissive pane is a thin film that encloses nothing, and cutout holes are open.
 // References: Unity APV documentation ("probe validity"); Marques et al. 2013 (spherical Fibonacci).
 #include <limits>
 
@@ -27,7 +28,7 @@ bool insideOne(const SceneTracer& tracer, const glm::vec3& p, size_t index, int 
   int back = 0;
   for (int k = 0; k < rays; ++k) {
     const glm::vec3 d = glm::vec3(glm::normalize(rotation * sphericalFibonacci(k, rays)));
-    const Hit hit = tracer.intersect(p, d, 0.0f, std::numeric_limits<float>::infinity());
+    const Hit hit = tracer.intersect(p, d, 0.0f, std::numeric_limits<float>::infinity(), 0.0f);
     if (hit.hit && !hit.frontFace) ++back;
   }
   return double(back) > backFaceFraction * double(rays);

@@ -1,6 +1,8 @@
 // Unidirectional path tracer for Lambertian scenes with next-event estimation: emissive triangles sampled by
 // power and combined with cosine-weighted BSDF sampling by the power heuristic; point, spot and directional
 // lights by shadow rays; sky reached by BSDF-sampled rays; Russian roulette after the second bounce.
+// Thin transmissive surfaces (scene.h's energy model): paths pass them by a random choice with probability
+// `transmission`, shadow rays are weighted by the transmittance of their segment (SceneTracer).
 // References: Veach 1997 (PhD thesis, ch. 9 "Multiple importance sampling"); Pharr, Jakob & Humphreys,
 // "Physically Based Rendering", 4th ed., ch. 13 (path tracing, NEE, Russian roulette); Arvo & Kirk 1990
 // ("Particle transport and image synthesis", Russian roulette).
@@ -61,8 +63,9 @@ glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, cons
       }
       const float c = glm::dot(n, w);
       if (c <= 0.0f) continue;
-      if (tracer.occluded(origin, w, 0.0f, kInfinity)) continue;
-      e += l.intensity * c;
+      const float through = tracer.transmittance(origin, w, 0.0f, kInfinity);
+      if (through <= 0.0f) continue;
+      e += through < 1.0f ? l.intensity * (c * through) : l.intensity * c;
       continue;
     }
     const glm::vec3 d = l.position - x;
@@ -80,8 +83,9 @@ glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, cons
     }
     const glm::vec3 s = target - origin;
     const float dist = glm::length(s);
-    if (dist > eps && tracer.occluded(origin, s / dist, 0.0f, dist - eps)) continue;
-    e += l.intensity * (spot * c / r2);
+    const float through = dist > eps ? tracer.transmittance(origin, s / dist, 0.0f, dist - eps) : 1.0f;
+    if (through <= 0.0f) continue;
+    e += through < 1.0f ? l.intensity * (spot * c / r2 * through) : l.intensity * (spot * c / r2);
   }
   return e;
 }
@@ -94,6 +98,7 @@ glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin,
   const float u1 = rng.uniform(), u2 = rng.uniform();
   const uint32_t tri = impl.emissive[sampleCdf(impl.emissiveCdf, uLight)];
   const glm::vec2 b = uniformTriangle(u1, u2);
+  if (tracer.isHole(tri, b.x, b.y)) return glm::vec3(0.0f);  // no emitter there (BSDF rays miss it too)
   const glm::vec3 p = impl.pointOn(tri, b.x, b.y);
   const glm::vec3 d = p - origin;
   const float dist2 = glm::dot(d, d);
@@ -105,9 +110,11 @@ glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin,
   if (cosReceiver <= 0.0f || cosLight <= 0.0f) return glm::vec3(0.0f);  // emission is front-face only
   const float pdfLight = impl.emissivePdfArea[tri] * dist2 / cosLight;
   const float eps = tracer.rayEpsilon();
-  if (dist > eps && tracer.occluded(origin, w, 0.0f, dist - eps)) return glm::vec3(0.0f);
+  const float through = dist > eps ? tracer.transmittance(origin, w, 0.0f, dist - eps) : 1.0f;
+  if (through <= 0.0f) return glm::vec3(0.0f);
   const float weight = powerHeuristic(pdfLight, cosReceiver * kInvPi);
-  return impl.material(tri).emission * (cosReceiver * weight / pdfLight);
+  const glm::vec3 e = impl.material(tri).emission * (cosReceiver * weight / pdfLight);
+  return through < 1.0f ? e * through : e;
 }
 
 glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
@@ -117,9 +124,10 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
   const float eps = impl.rayEpsilon;
   glm::vec3 radiance(0.0f), throughput(1.0f);
   glm::vec3 o = origin, d = dir;
+  float tnear = 0.0f;  // > 0 after stepping through transmissive surfaces: the ray resumes past them
   for (int vertex = 0;; ++vertex) {
     const bool direct = vertex == 0;
-    const Hit hit = tracer.intersect(o, d, 0.0f, kInfinity);
+    const Hit hit = tracer.intersect(o, d, tnear, kInfinity);
     if (!hit.hit) {
       if (!direct || (settings.content & kContentSky)) radiance += throughput * skyRadiance(scene, d);
       break;
@@ -134,6 +142,16 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
         weight = powerHeuristic(prevPdf, pdfLight);
       }
       radiance += throughput * m.emission * weight;
+    }
+    // A transmissive surface lets the ray through with probability `transmission` (unbiased for the thin-glass
+    // model: the surface passes that fraction unchanged and reflects the rest with its albedo, so the
+    // reflection below needs no extra weight). Passing is no bounce: same vertex, same origin (hit.t stays
+    // the distance from the last scattering point, as the MIS weight above needs). Opaque surfaces draw no
+    // random number, so scenes without transmission trace as before, bit for bit.
+    if (m.transmission > 0.0f && (m.transmission >= 1.0f || rng.uniform() < m.transmission)) {
+      tnear = std::max(hit.t + eps, std::nextafter(hit.t, kInfinity));
+      --vertex;
+      continue;
     }
     if (vertex >= settings.bounces) break;
     if (direct && !(settings.content & kContentIndirect)) break;
@@ -152,6 +170,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
     d = cosineHemisphere(n, u1, u2);
     prevPdf = std::max(glm::dot(n, d), 1e-12f) * kInvPi;
     o = p;
+    tnear = 0.0f;
     throughput *= m.albedo;
   }
   return radiance;

@@ -25,13 +25,16 @@ struct TraceSettings {
 // Radiance in W/(m^2 sr) arriving at `origin` from unit direction `dir` (the ray starts at origin, tnear 0).
 // `prevPdf` > 0: `dir` was drawn from a cosine lobe with this solid-angle pdf at a point that also sampled
 // the emissive triangles (emissiveIrradiance), so emission met by this ray is MIS-weighted against that;
-// 0: no light sampling was done at origin and emission counts fully.
+// 0: no light sampling was done at origin and emission counts fully. At a transmissive surface the path
+// continues straight on with probability `transmission` (the path's rng; no bounce counted), else
+// reflects diffusely with the albedo; opaque surfaces draw no extra random number.
 glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
                            float prevPdf, const TraceSettings& settings, Rng& rng);
 
 // One-sample estimate of the irradiance (W/m^2) at `origin` (already offset from its surface) with unit
 // normal n from emissive triangles, sampled by power and MIS-weighted (power heuristic) against cosine
-// sampling of the hemisphere about n. Shadow-tested.
+// sampling of the hemisphere about n. Shadow-tested: weighted by the segment's transmittance. Points that
+// fall in an alpha-cutout hole of the chosen emitter contribute 0 (BSDF rays miss them too).
 glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
                              Rng& rng);
 
@@ -39,7 +42,8 @@ glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin,
 // start at `origin` (x offset off its surface, or x itself in free space). Point/spot: I cos / r^2 with
 // r = |light - x|, spot cone smoothstep(cos outer, cos inner, cos angle); a light radius > 0 jitters the
 // shadow ray's end on that sphere (soft shadows). Directional: E cos(w) for w uniform in the sun disc's cone
-// (the disc's perpendicular irradiance is E). Exact (no randomness) for zero radii.
+// (the disc's perpendicular irradiance is E). Each is weighted by its shadow ray's transmittance (0 when an
+// opaque surface blocks it). Exact (no randomness) for zero radii.
 glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
                              const glm::vec3& n, Rng& rng);
 

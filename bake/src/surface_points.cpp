@@ -1,6 +1,8 @@
 // Random surface points for the evaluation: area-weighted triangle choice, uniform point in the triangle,
 // and the side that faces open space, found by a small back-face ray test on each side (the Unity APV 25 %
-// rule applied to a hemisphere). Points enclosed on both sides are redrawn, within a bounded number of draws.
+// rule applied to a hemisphere). Points enclosed on both sides, and points in alpha-cutout holes, are redrawn,
+// within a bounded number of draws. The side test counts only opaque surfaces (a glass pane encloses
+// nothing).
 // References: Osada et al. 2002 ("Shape distributions", uniform triangle sampling); Unity APV docs.
 #include <algorithm>
 #include <limits>
@@ -33,7 +35,7 @@ bool sideIsOpen(const SceneTracer& tracer, const glm::vec3& origin, const glm::v
     // Stratified in the first coordinate (cos theta) so 32 rays cover the hemisphere evenly.
     const float u1 = (float(k) + rng.uniform()) / float(kSideRays), u2 = rng.uniform();
     const glm::vec3 d = uniformHemisphere(n, u1, u2);
-    const Hit hit = tracer.intersect(origin, d, 0.0f, std::numeric_limits<float>::infinity());
+    const Hit hit = tracer.intersect(origin, d, 0.0f, std::numeric_limits<float>::infinity(), 0.0f);
     if ((hit.hit && !hit.frontFace) || (!hit.hit && blackSky)) ++back;
   }
   return double(back) <= kSideBackFaceFraction * kSideRays;
@@ -61,6 +63,7 @@ std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int cou
     if (!(impl.areas[tri] > 0.0f)) continue;
     const float u1 = rng.uniform(), u2 = rng.uniform();
     const glm::vec2 b = uniformTriangle(u1, u2);
+    if (tracer.isHole(uint32_t(tri), b.x, b.y)) continue;  // no surface there
     const glm::vec3 p = impl.pointOn(uint32_t(tri), b.x, b.y);
     const glm::vec3 front = impl.normals[tri];
     glm::vec3 n(0.0f);

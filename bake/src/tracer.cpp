@@ -1,6 +1,10 @@
-// SceneTracer: one Embree 3 triangle geometry built from a Scene, closest-hit and any-hit queries with
-// rtcIntersect1 / rtcOccluded1, plus the tables the samplers need (normals, areas, an emissive power CDF).
-// References: Embree 3 API manual (rtcNewGeometry, rtcSetNewGeometryBuffer, rtcIntersect1); Wald et al. 2014,
+// SceneTracer: one Embree 3 triangle geometry built from a Scene (and a second one for alpha-cutout
+// triangles, with filter functions that reject hits in holes), closest-hit and any-hit queries with
+// rtcIntersect1 / rtcOccluded1, queries that step over transmissive surfaces (by closest hits, which each
+// surface meets once whatever the BVH's spatial splits), plus the tables the samplers need (normals, areas,
+// an emissive power CDF).
+// References: Embree 3 API manual (rtcNewGeometry, rtcSetNewGeometryBuffer, rtcIntersect1,
+// rtcSetGeometryIntersectFilterFunction); Wald et al. 2014,
 // "Embree: a kernel framework for efficient CPU ray tracing".
 #include "tetraprobe/bake/tracer.h"
 
@@ -59,6 +63,42 @@ void validate(const Scene& scene) {
     if (!finite(m.albedo) || !finite(m.emission) || glm::any(glm::lessThan(m.emission, glm::vec3(0.0f))) ||
         glm::any(glm::lessThan(m.albedo, glm::vec3(0.0f))))
       throw InputError(where(scene) + ": material '" + m.name + "' has a negative or non-finite colour");
+  if (const std::string problem = transparencyProblem(scene); !problem.empty())
+    throw InputError(where(scene) + ": " + problem);
+}
+
+// Alpha-cutout triangles (those listed with texture coordinates whose material has a texture), and whether
+// any triangle transmits.
+void buildTransparency(SceneTracer::Impl& impl) {
+  const Scene& scene = *impl.scene;
+  for (uint32_t m : scene.triangleMaterial) impl.anyTransmission |= scene.materials[m].transmission > 0.0f;
+  for (size_t k = 0; k < scene.cutoutTriangles.size(); ++k) {
+    const uint32_t tri = scene.cutoutTriangles[k];
+    const Material& m = impl.material(tri);
+    if (m.alphaTexture < 0) continue;
+    SceneTracer::Impl::Cutout c;
+    c.triangle = tri;
+    for (size_t i = 0; i < 3; ++i) c.uv[i] = scene.cutoutUvs[3 * k + i];
+    c.texture = &scene.alphaTextures[size_t(m.alphaTexture)];
+    c.cutoff = m.alphaCutoff;
+    impl.cutouts.push_back(c);
+  }
+}
+
+// Embree filter of geometry 1 (intersect and occluded alike): a hit in a hole is no hit.
+void cutoutFilter(const RTCFilterFunctionNArguments* args) {
+  const auto* impl = static_cast<const SceneTracer::Impl*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    if (impl->cutouts[prim].hole(RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+      args->valid[i] = 0;
+  }
+}
+
+// Resumes a ray past a surface met at distance t.
+float pastHit(float t, float eps) {
+  return std::max(t + eps, std::nextafter(t, std::numeric_limits<float>::infinity()));
 }
 
 void buildTables(SceneTracer::Impl& impl) {
@@ -141,9 +181,35 @@ SceneTracer::SceneTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     for (int k = 0; k < 3; ++k) vb[3 * i + k] = scene.positions[i][k];
   for (size_t i = 0; i < scene.triangles.size(); ++i)
     for (int k = 0; k < 3; ++k) ib[3 * i + k] = scene.triangles[i][k];
+  buildTransparency(*impl_);
+  for (const Impl::Cutout& c : impl_->cutouts)  // traced in geometry 1 instead
+    for (int k = 0; k < 3; ++k) ib[3 * size_t(c.triangle) + size_t(k)] = scene.triangles[c.triangle].x;
   rtcCommitGeometry(geom);
-  rtcAttachGeometry(impl_->rtcScene, geom);
+  rtcAttachGeometryByID(impl_->rtcScene, geom, 0);
   rtcReleaseGeometry(geom);
+  if (!impl_->cutouts.empty()) {
+    const size_t n = impl_->cutouts.size();
+    RTCGeometry cut = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* cvb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(cut, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+    auto* cib = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(cut, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
+    checkDevice(impl_->device, "cutout geometry buffers");
+    for (size_t i = 0; i < n; ++i) {
+      glm::vec3 p[3];
+      impl_->vertices(impl_->cutouts[i].triangle, p[0], p[1], p[2]);
+      for (size_t j = 0; j < 3; ++j) {
+        for (int k = 0; k < 3; ++k) cvb[9 * i + 3 * j + size_t(k)] = p[j][k];
+        cib[3 * i + j] = unsigned(3 * i + j);
+      }
+    }
+    rtcSetGeometryUserData(cut, impl_.get());
+    rtcSetGeometryIntersectFilterFunction(cut, cutoutFilter);
+    rtcSetGeometryOccludedFilterFunction(cut, cutoutFilter);
+    rtcCommitGeometry(cut);
+    rtcAttachGeometryByID(impl_->rtcScene, cut, 1);
+    rtcReleaseGeometry(cut);
+  }
   rtcCommitScene(impl_->rtcScene);
   checkDevice(impl_->device, "scene build");
 }
@@ -161,7 +227,51 @@ float SceneTracer::rayEpsilon() const {
   return impl_->rayEpsilon;
 }
 
-Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
+float SceneTracer::transmission(uint32_t triangle) const {
+  return impl_->material(triangle).transmission;
+}
+
+bool SceneTracer::hasTransmission() const {
+  return impl_->anyTransmission;
+}
+
+bool SceneTracer::isHole(uint32_t triangle, float u, float v) const {
+  if (impl_->cutouts.empty() || impl_->material(triangle).alphaTexture < 0) return false;
+  const auto it = std::lower_bound(impl_->cutouts.begin(), impl_->cutouts.end(), triangle,
+                                   [](const Impl::Cutout& c, uint32_t t) { return c.triangle < t; });
+  return it != impl_->cutouts.end() && it->triangle == triangle && it->hole(u, v);
+}
+
+Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar,
+                           float maxTransmission) const {
+  Hit hit = closestHit(origin, dir, tnear, tfar);
+  if (maxTransmission >= 1.0f || !impl_->anyTransmission) return hit;
+  while (hit.hit && transmission(hit.triangle) > maxTransmission)
+    hit = closestHit(origin, dir, pastHit(hit.t, impl_->rayEpsilon), tfar);
+  return hit;
+}
+
+bool SceneTracer::occluded(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar,
+                           float maxTransmission) const {
+  if (maxTransmission >= 1.0f || !impl_->anyTransmission) return anyHit(origin, dir, tnear, tfar);
+  return intersect(origin, dir, tnear, tfar, maxTransmission).hit;
+}
+
+float SceneTracer::transmittance(const glm::vec3& origin, const glm::vec3& dir, float tnear,
+                                 float tfar) const {
+  if (!impl_->anyTransmission) return anyHit(origin, dir, tnear, tfar) ? 0.0f : 1.0f;
+  float through = 1.0f;
+  for (;;) {
+    const Hit hit = closestHit(origin, dir, tnear, tfar);
+    if (!hit.hit) return through;
+    const float t = transmission(hit.triangle);
+    if (!(t > 0.0f)) return 0.0f;
+    through *= t;
+    tnear = pastHit(hit.t, impl_->rayEpsilon);
+  }
+}
+
+Hit SceneTracer::closestHit(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
@@ -190,7 +300,7 @@ Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float 
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.hit = true;
   hit.t = rh.ray.tfar;
-  hit.triangle = rh.hit.primID;
+  hit.triangle = rh.hit.geomID == 0 ? rh.hit.primID : impl_->cutouts[rh.hit.primID].triangle;
   // Embree's Ng is (P1 - P0) x (P2 - P0), the counter-clockwise front normal, unnormalised. Normalising it is
   // cheaper than a lookup in Impl::normals (a cache miss outside Embree's leaf data).
   const glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
@@ -202,7 +312,7 @@ Hit SceneTracer::intersect(const glm::vec3& origin, const glm::vec3& dir, float 
   return hit;
 }
 
-bool SceneTracer::occluded(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
+bool SceneTracer::anyHit(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/bake/tracer.h"
@@ -30,6 +31,21 @@ struct SceneTracer::Impl {
   std::vector<float> emissivePdfArea;  // per triangle (all triangles): P(choose it) / area, 0 if not emissive
   double emissiveArea = 0.0;           // m^2
   double emissivePower = 0.0;          // W (luminance-weighted)
+
+  // Transparency. The triangles of materials with an alpha cutout (and texture coordinates) are Embree
+  // geometry 1, whose filter functions reject hits in holes; in geometry 0 they are degenerate (never hit),
+  // so geometry 0's primitive ids stay the Scene's triangle indices.
+  struct Cutout {
+    uint32_t triangle = 0;  // index into Scene::triangles
+    glm::vec2 uv[3];        // texture coordinates of its corners
+    const AlphaTexture* texture = nullptr;
+    float cutoff = 0.5f;
+    bool hole(float u, float v) const {
+      return texture->sample(uv[0] * (1.0f - u - v) + uv[1] * u + uv[2] * v) < cutoff;
+    }
+  };
+  std::vector<Cutout> cutouts;  // geometry 1's primitives, by increasing triangle index
+  bool anyTransmission = false;
 
   const Material& material(uint32_t triangle) const {
     return scene->materials[scene->triangleMaterial[triangle]];

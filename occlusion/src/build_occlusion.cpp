@@ -97,6 +97,7 @@ std::vector<Polygon> clippedGeometry(const Context& ctx, const TetFrame& frame,
   ctx.grid->query(lo, hi, scratch);
   const Scene& scene = ctx.tracer.scene();
   for (uint32_t t : scratch) {
+    if (ctx.tracer.transmission(t) > kOcclusionWallTransmission) continue;  // see-through: no wall
     const glm::uvec3 tri = scene.triangles[t];
     const glm::dvec3 &a = ctx.local[tri.x], &b = ctx.local[tri.y], &c = ctx.local[tri.z];
     const glm::dvec3 tlo = glm::min(a, glm::min(b, c)), thi = glm::max(a, glm::max(b, c));
@@ -144,7 +145,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
       const float dist = glm::length(d);
       bool blocked = false;
       if (dist > 0.0f) {
-        blocked = ctx.tracer.occluded(origin, d / dist, 0.0f, dist);
+        blocked = ctx.tracer.occluded(origin, d / dist, 0.0f, dist, kOcclusionWallTransmission);
         ++rays;
       }
       if (!blocked) s.visible |= 1u << i;
@@ -282,7 +283,7 @@ void makeShadowMaps(Candidate& c, const Context& ctx, const TetFrame& frame, uin
         const float len = glm::length(d);
         uint8_t q = kShadowMapNoHit;
         if (len > 0.0f) {
-          const Hit hit = ctx.tracer.intersect(probe, d / len, 0.0f, len);
+          const Hit hit = ctx.tracer.intersect(probe, d / len, 0.0f, len, kOcclusionWallTransmission);
           ++rays;
           if (hit.hit)
             q = uint8_t(std::min(254.0, std::round(double(hit.t) / double(len) * double(kShadowMapScale))));

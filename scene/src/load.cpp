@@ -56,8 +56,12 @@ void validateScene(Scene& scene, const std::string& path) {
       throw InputError(path + ": camera '" + c.name + "' has a non-finite value");
   }
 
+  // Checked before triangles are dropped (the remapping below relies on it).
+  if (const std::string problem = transparencyProblem(scene); !problem.empty())
+    throw InputError(path + ": " + problem);
   size_t kept = 0;
   size_t degenerate = 0;
+  size_t nextCutout = 0, keptCutouts = 0;  // cutoutTriangles follow the triangles they name
   for (size_t t = 0; t < scene.triangles.size(); ++t) {
     const glm::uvec3 tri = scene.triangles[t];
     for (int k = 0; k < 3; ++k) {
@@ -72,14 +76,24 @@ void validateScene(Scene& scene, const std::string& path) {
     const glm::vec3 a = scene.positions[tri.x], b = scene.positions[tri.y], c = scene.positions[tri.z];
     const glm::vec3 n = glm::cross(b - a, c - a);
     const float area2 = glm::dot(n, n);
+    const bool listed = nextCutout < scene.cutoutTriangles.size() && scene.cutoutTriangles[nextCutout] == t;
+    if (listed) ++nextCutout;
     if (!(area2 > 0.0f) || !std::isfinite(area2)) {
       ++degenerate;
       continue;
+    }
+    if (listed) {
+      scene.cutoutTriangles[keptCutouts] = static_cast<uint32_t>(kept);
+      for (size_t k = 0; k < 3; ++k)
+        scene.cutoutUvs[3 * keptCutouts + k] = scene.cutoutUvs[3 * (nextCutout - 1) + k];
+      ++keptCutouts;
     }
     scene.triangles[kept] = tri;
     scene.triangleMaterial[kept] = scene.triangleMaterial[t];
     ++kept;
   }
+  scene.cutoutTriangles.resize(keptCutouts);
+  scene.cutoutUvs.resize(3 * keptCutouts);
   scene.triangles.resize(kept);
   scene.triangleMaterial.resize(kept);
   if (degenerate > 0)

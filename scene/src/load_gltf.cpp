@@ -6,7 +6,11 @@
 // Materials: albedo = baseColorFactor x mean linear base-colour texture; emission = emissiveFactor x
 // KHR_materials_emissive_strength x mean linear emissive texture. KHR_lights_punctual values are taken as
 // radiometric (cd -> W/sr, lux -> W/m^2) and emissive nits as W/(m^2 sr), so an OBJ and a glTF export of
-// the same level agree (docs/scene_format.md). Perspective cameras become named Camera entries.
+// the same level agree (docs/scene_format.md). Transparency: alphaMode BLEND -> transmission 1 - alpha (mean
+// texture alpha), MASK -> a per-texel cutout of the base-colour texture's alpha (TEXCOORD_n with
+// KHR_texture_transform, the sampler's wrap modes), KHR_materials_transmission -> transmission as well.
+// Perspective cameras become named Camera entries.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -48,6 +52,19 @@ bool keepEncodedImage(tinygltf::Image* image, const int, std::string*, std::stri
   return true;
 }
 
+// How a cutout material's triangles find their texture coordinates: TEXCOORD_<set>, then
+// KHR_texture_transform's affine map (u' = m[0] u + m[1] v + m[2], v' = m[3] u + m[4] v + m[5]).
+struct UvMapping {
+  int set = 0;
+  float m[6] = {1, 0, 0, 0, 1, 0};
+};
+
+// A decoded alpha plane and its slot in Scene::alphaTextures once a material keeps it as a cutout.
+struct AlphaEntry {
+  std::optional<AlphaTexture> texture;
+  int32_t slot = -1;
+};
+
 struct Context {
   const tinygltf::Model& model;
   const std::string& path;
@@ -58,6 +75,9 @@ struct Context {
   std::vector<int> onPath;  // nodes on the current root-to-node path (cycle guard)
   size_t skippedPrimitives = 0;
   size_t visits = 0;  // node instances visited (guards against exponential DAG instancing)
+  std::map<std::pair<int, int>, AlphaEntry> alphaPlanes;  // (texture, AlphaSource) -> plane
+  std::map<uint32_t, UvMapping> cutoutUv;                 // Scene material with a cutout -> its UV mapping
+  size_t cutoutWithoutUv = 0;                             // cutout primitives lacking texture coordinates
 };
 
 [[noreturn]] void fail(const Context& ctx, const std::string& what) {
@@ -215,6 +235,140 @@ std::optional<glm::vec3> textureMean(Context& ctx, int textureIndex, const std::
   return mean;
 }
 
+// The encoded bytes of texture `textureIndex`'s image, decoded into an alpha plane (cached per texture and
+// source); wrap modes from its sampler. nullptr (+ warning) when it cannot be had.
+AlphaEntry* textureAlpha(Context& ctx, int textureIndex, AlphaSource source, const std::string& material) {
+  const auto key = std::make_pair(textureIndex, static_cast<int>(source));
+  auto it = ctx.alphaPlanes.find(key);
+  if (it != ctx.alphaPlanes.end()) return it->second.texture ? &it->second : nullptr;
+  AlphaEntry& e = ctx.alphaPlanes[key];
+  const auto& m = ctx.model;
+  std::string error;
+  if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= m.textures.size()) {
+    error = "texture " + std::to_string(textureIndex) + " out of range";
+  } else {
+    const tinygltf::Texture& tex = m.textures[static_cast<size_t>(textureIndex)];
+    if (tex.source < 0 || static_cast<size_t>(tex.source) >= m.images.size()) {
+      error = "texture without a usable image";
+    } else {
+      const tinygltf::Image& img = m.images[static_cast<size_t>(tex.source)];
+      if (!img.image.empty()) {
+        e.texture = decodeAlpha(img.image.data(), img.image.size(), source, error);
+        if (e.texture) e.texture->name = img.uri.empty() ? "image " + std::to_string(tex.source) : img.uri;
+      } else if (!img.uri.empty()) {
+        const std::filesystem::path dir = std::filesystem::path(ctx.path).parent_path();
+        if (auto file = resolveTexturePath(dir, img.uri))
+          e.texture = decodeAlphaFile(*file, source, error);
+        else
+          error = "image '" + img.uri + "' not found";
+      } else {
+        error = "image " + std::to_string(tex.source) + " has no data";
+      }
+      if (e.texture && tex.sampler >= 0 && static_cast<size_t>(tex.sampler) < m.samplers.size()) {
+        auto wrap = [](int mode) {
+          return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? TextureWrap::kClampToEdge
+                 : mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::kMirroredRepeat
+                                                                 : TextureWrap::kRepeat;
+        };
+        e.texture->wrapU = wrap(m.samplers[static_cast<size_t>(tex.sampler)].wrapS);
+        e.texture->wrapV = wrap(m.samplers[static_cast<size_t>(tex.sampler)].wrapT);
+      }
+    }
+  }
+  if (!e.texture) {
+    ctx.scene.warnings.push_back(ctx.path + ": material '" + material + "': alpha: " + error +
+                                 "; treated as opaque");
+    return nullptr;
+  }
+  return &e;
+}
+
+double extensionNumber(const tinygltf::ExtensionMap& extensions, const char* extension, const char* key,
+                       double fallback) {
+  auto ext = extensions.find(extension);
+  if (ext == extensions.end() || !ext->second.Has(key)) return fallback;
+  const tinygltf::Value& v = ext->second.Get(key);
+  return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+}
+
+// TEXCOORD set and KHR_texture_transform of a texture reference.
+UvMapping uvMapping(const tinygltf::TextureInfo& info) {
+  UvMapping map;
+  map.set = info.texCoord;
+  auto ext = info.extensions.find("KHR_texture_transform");
+  if (ext == info.extensions.end()) return map;
+  const tinygltf::Value& t = ext->second;
+  auto num = [&t](const char* key, int index, double fallback) {
+    if (!t.Has(key)) return fallback;
+    const tinygltf::Value& v = t.Get(key);
+    if (index < 0) return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+    if (!v.IsArray() || v.ArrayLen() <= static_cast<size_t>(index)) return fallback;
+    const tinygltf::Value& x = v.Get(index);
+    return x.IsNumber() ? x.GetNumberAsDouble() : fallback;
+  };
+  const double ox = num("offset", 0, 0.0), oy = num("offset", 1, 0.0), r = num("rotation", -1, 0.0);
+  const double sx = num("scale", 0, 1.0), sy = num("scale", 1, 1.0);
+  // Translation x Rotation x Scale as the extension defines them (rotation counter-clockwise in UV space).
+  const double c = std::cos(r), s = std::sin(r);
+  map.m[0] = static_cast<float>(c * sx);
+  map.m[1] = static_cast<float>(s * sy);
+  map.m[2] = static_cast<float>(ox);
+  map.m[3] = static_cast<float>(-s * sx);
+  map.m[4] = static_cast<float>(c * sy);
+  map.m[5] = static_cast<float>(oy);
+  if (t.Has("texCoord") && t.Get("texCoord").IsInt()) map.set = t.Get("texCoord").Get<int>();
+  return map;
+}
+
+// alphaMode and KHR_materials_transmission -> transmission and cutout (docs/scene_format.md).
+void convertTransparency(Context& ctx, const tinygltf::Material& gm, Material& out, uint32_t sceneIndex) {
+  const auto& pbr = gm.pbrMetallicRoughness;
+  const double factorAlpha = pbr.baseColorFactor.size() > 3 ? pbr.baseColorFactor[3] : 1.0;
+  const float alpha =
+      std::isfinite(factorAlpha) ? static_cast<float>(std::clamp(factorAlpha, 0.0, 1.0)) : 1.0f;
+  const int texture = pbr.baseColorTexture.index;
+  if (gm.alphaMode == "BLEND") {
+    // Coverage: a fraction alpha of the surface is there; the rest lets light through.
+    float a = alpha;
+    if (texture >= 0) {
+      if (AlphaEntry* e = textureAlpha(ctx, texture, AlphaSource::kAlphaElseOpaque, out.name))
+        a *= meanAlpha(*e->texture);
+    }
+    out.transmission = 1.0f - a;
+  } else if (gm.alphaMode == "MASK") {
+    // Visible where alpha x texel alpha >= cutoff, i.e. texel alpha >= cutoff / alpha.
+    const float cutoff = std::isfinite(gm.alphaCutoff) ? static_cast<float>(gm.alphaCutoff) : 0.5f;
+    if (cutoff <= 0.0f) {
+      // every texel passes: opaque
+    } else if (alpha < cutoff && (texture < 0 || alpha <= 0.0f)) {
+      out.transmission = 1.0f;  // nothing passes the cutoff: a hole everywhere
+    } else if (texture >= 0) {
+      if (AlphaEntry* e = textureAlpha(ctx, texture, AlphaSource::kAlphaElseOpaque, out.name)) {
+        if (applyCutout(ctx.scene, out, *e->texture, cutoff / alpha, e->slot))
+          ctx.cutoutUv[sceneIndex] = uvMapping(pbr.baseColorTexture);
+      }
+    }
+  } else if (!gm.alphaMode.empty() && gm.alphaMode != "OPAQUE") {
+    ctx.scene.warnings.push_back(ctx.path + ": material '" + out.name + "': unknown alphaMode '" +
+                                 gm.alphaMode + "'; treated as opaque");
+  }
+  auto ext = gm.extensions.find("KHR_materials_transmission");
+  if (ext != gm.extensions.end()) {
+    double t = extensionNumber(gm.extensions, "KHR_materials_transmission", "transmissionFactor", 0.0);
+    t = std::isfinite(t) ? std::clamp(t, 0.0, 1.0) : 0.0;
+    if (t > 0.0 && ext->second.Has("transmissionTexture")) {
+      const tinygltf::Value& info = ext->second.Get("transmissionTexture");
+      if (info.Has("index") && info.Get("index").IsInt()) {
+        // The red channel, linear, multiplies the factor; its mean stands for the surface.
+        if (AlphaEntry* e = textureAlpha(ctx, info.Get("index").Get<int>(), AlphaSource::kFirst, out.name))
+          t *= meanAlpha(*e->texture);
+      }
+    }
+    // Of the light the coverage lets meet the surface, a fraction t passes through as well.
+    out.transmission = 1.0f - (1.0f - out.transmission) * (1.0f - static_cast<float>(t));
+  }
+}
+
 void convertMaterials(Context& ctx, bool textures) {
   const auto& m = ctx.model;
   ctx.materialMap.resize(m.materials.size());
@@ -236,7 +390,9 @@ void convertMaterials(Context& ctx, bool textures) {
     if (textures && gm.emissiveTexture.index >= 0 && out.emission != glm::vec3(0.0f)) {
       if (auto mean = textureMean(ctx, gm.emissiveTexture.index, out.name)) out.emission *= *mean;
     }
-    ctx.materialMap[i] = static_cast<uint32_t>(ctx.scene.materials.size());
+    const uint32_t sceneIndex = static_cast<uint32_t>(ctx.scene.materials.size());
+    convertTransparency(ctx, gm, out, sceneIndex);
+    ctx.materialMap[i] = sceneIndex;
     ctx.scene.materials.push_back(out);
   }
 }
@@ -252,6 +408,35 @@ uint32_t sceneMaterial(Context& ctx, int gltfMaterial) {
     ctx.scene.materials.push_back(Material{"default", glm::vec3(0.8f), glm::vec3(0.0f)});
   }
   return ctx.defaultMaterial;
+}
+
+// TEXCOORD_<map.set> of a primitive with `vertices` vertices, mapped by `map`: float, or normalised unsigned
+// byte / short, VEC2. Empty when the primitive has none or they do not fit (the caller warns).
+std::vector<glm::vec2> readTexcoords(const Context& ctx, const tinygltf::Primitive& prim,
+                                     const UvMapping& map, size_t vertices) {
+  auto it = prim.attributes.find("TEXCOORD_" + std::to_string(map.set));
+  if (it == prim.attributes.end()) return {};
+  const AccessorView v = viewAccessor(ctx, it->second, "TEXCOORD");
+  if (v.components != 2 || v.count != vertices) return {};
+  std::vector<glm::vec2> out(v.count);
+  for (size_t i = 0; i < v.count; ++i) {
+    const unsigned char* p = v.data + i * v.stride;
+    glm::vec2 uv;
+    if (v.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+      std::memcpy(&uv, p, sizeof(float) * 2);
+    } else if (v.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && v.normalized) {
+      uv = glm::vec2(p[0], p[1]) / 255.0f;
+    } else if (v.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT && v.normalized) {
+      uint16_t x[2];
+      std::memcpy(x, p, 4);
+      uv = glm::vec2(x[0], x[1]) / 65535.0f;
+    } else {
+      return {};
+    }
+    out[i] =
+        glm::vec2(map.m[0] * uv.x + map.m[1] * uv.y + map.m[2], map.m[3] * uv.x + map.m[4] * uv.y + map.m[5]);
+  }
+  return out;
 }
 
 void addPrimitive(Context& ctx, const tinygltf::Primitive& prim, const glm::dmat4& world, size_t meshIndex) {
@@ -290,8 +475,18 @@ void addPrimitive(Context& ctx, const tinygltf::Primitive& prim, const glm::dmat
   }
   const bool flip = glm::determinant(glm::dmat3(world)) < 0.0;
   const uint32_t material = sceneMaterial(ctx, prim.material);
+  std::vector<glm::vec2> uvs;  // per vertex, only for a cutout material
+  if (ctx.scene.materials[material].alphaTexture >= 0) {
+    const UvMapping& map = ctx.cutoutUv[material];
+    uvs = readTexcoords(ctx, prim, map, local.size());
+    if (uvs.empty()) ++ctx.cutoutWithoutUv;
+  }
   auto emit = [&](uint32_t a, uint32_t b, uint32_t c) {
     if (flip) std::swap(b, c);
+    if (!uvs.empty()) {
+      ctx.scene.cutoutTriangles.push_back(static_cast<uint32_t>(ctx.scene.triangles.size()));
+      ctx.scene.cutoutUvs.insert(ctx.scene.cutoutUvs.end(), {uvs[a], uvs[b], uvs[c]});
+    }
     ctx.scene.triangles.emplace_back(base + a, base + b, base + c);
     ctx.scene.triangleMaterial.push_back(material);
   };
@@ -420,19 +615,14 @@ Scene loadGltf(const std::string& path, const MeshOptions& options) {
     if (!line.empty()) scene.warnings.push_back(path + ": " + line);
   }
 
-  Context ctx{model, path, scene, {}, UINT32_MAX, {}, {}, 0, 0};
+  Context ctx{model, path, scene};
   for (const std::string& ext : model.extensionsRequired) {
     if (ext != "KHR_lights_punctual" && ext != "KHR_materials_emissive_strength" &&
         ext != "KHR_texture_transform" && ext != "KHR_materials_pbrSpecularGlossiness" &&
-        ext != "KHR_materials_unlit")
+        ext != "KHR_materials_unlit" && ext != "KHR_materials_transmission")
       throw InputError(path + ": requires unsupported glTF extension " + ext);
   }
   convertMaterials(ctx, options.textures);
-  size_t translucent = 0;
-  for (const auto& m : model.materials) translucent += m.alphaMode == "BLEND" || m.alphaMode == "MASK";
-  if (translucent > 0)
-    scene.warnings.push_back(path + ": " + std::to_string(translucent) +
-                             " material(s) with alphaMode BLEND/MASK treated as opaque");
 
   std::vector<int> roots;
   int sceneIndex = model.defaultScene;
@@ -451,6 +641,11 @@ Scene loadGltf(const std::string& path, const MeshOptions& options) {
     }
   }
   for (int r : roots) visitNode(ctx, r, glm::dmat4(1.0));
+  if (ctx.cutoutWithoutUv > 0)
+    scene.warnings.push_back(
+        path + ": " + std::to_string(ctx.cutoutWithoutUv) +
+        " primitive(s) with an alphaMode MASK texture have no usable texture coordinates; "
+        "they are not cut out");
   if (ctx.skippedPrimitives > 0)
     scene.warnings.push_back(path + ": skipped " + std::to_string(ctx.skippedPrimitives) +
                              " point/line primitive" + (ctx.skippedPrimitives == 1 ? "" : "s"));

@@ -2,7 +2,9 @@
 // silently accept or skip (non-finite or missing vertex coordinates, face indices that are zero or out of
 // range), then tinyobjloader reads and triangulates polygons. Materials: Kd (x the mean linear colour of
 // map_Kd, as the MTL specification multiplies them) -> albedo; Ke (x the mean of map_Ke) -> emitted radiance
-// in W/(m^2 sr) taken as is. A missing MTL or image is a warning. Texture means are computed once per file.
+// in W/(m^2 sr) taken as is; d (or Tr, which tinyobjloader reads as 1 - d) -> transmission 1 - d; map_d ->
+// a per-texel alpha cutout at 0.5 (with the faces' texture coordinates). A missing MTL or image is a warning.
+// Texture means and alpha planes are computed once per file.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -125,6 +127,49 @@ class TextureMeans {
   std::map<std::string, std::optional<glm::vec3>> byName_;
 };
 
+// Alpha planes of map_d textures, decoded once per name; `slot` is the texture's index in
+// Scene::alphaTextures once a material keeps it as a cutout.
+class AlphaMaps {
+ public:
+  struct Entry {
+    std::optional<AlphaTexture> texture;
+    int32_t slot = -1;
+  };
+
+  AlphaMaps(std::filesystem::path baseDir, std::vector<std::filesystem::path> extraDirs, Scene& scene)
+      : baseDir_(std::move(baseDir)), extraDirs_(std::move(extraDirs)), scene_(scene) {}
+
+  Entry& get(const std::string& name, const std::string& material) {
+    auto it = byName_.find(name);
+    if (it != byName_.end()) return it->second;
+    Entry e;
+    std::optional<std::filesystem::path> file = resolveTexturePath(baseDir_, name);
+    for (size_t i = 0; !file && i < extraDirs_.size(); ++i)
+      file = resolveTexturePath(baseDir_ / extraDirs_[i], name);
+    if (file) {
+      std::string error;
+      e.texture = decodeAlphaFile(*file, AlphaSource::kAlphaElseFirst, error);
+      if (!e.texture)
+        scene_.warnings.push_back("material '" + material + "': alpha texture (map_d) " + error +
+                                  "; no cutout");
+    } else {
+      scene_.warnings.push_back("material '" + material + "': alpha texture (map_d) '" + name +
+                                "' not found under " + baseDir_.string() + "; no cutout");
+    }
+    return byName_.emplace(name, std::move(e)).first->second;
+  }
+
+ private:
+  std::filesystem::path baseDir_;
+  std::vector<std::filesystem::path> extraDirs_;
+  Scene& scene_;
+  std::map<std::string, Entry> byName_;
+};
+
+TextureWrap wrapOf(const tinyobj::texture_option_t& opt) {
+  return opt.clamp ? TextureWrap::kClampToEdge : TextureWrap::kRepeat;
+}
+
 void splitWarnings(const std::string& text, const std::string& path, Scene& scene) {
   std::istringstream lines(text);
   std::string line;
@@ -163,9 +208,9 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
     scene.positions[i] =
         glm::vec3(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
 
-  TextureMeans textures(dir, std::move(mtlDirs), scene);
+  TextureMeans textures(dir, mtlDirs, scene);
+  AlphaMaps alphaMaps(dir, std::move(mtlDirs), scene);
   scene.materials.reserve(objMaterials.size() + 1);
-  size_t translucent = 0;
   for (const tinyobj::material_t& m : objMaterials) {
     Material out;
     out.name = m.name;
@@ -177,12 +222,18 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
     if (options.textures && !m.emissive_texname.empty() && out.emission != glm::vec3(0.0f)) {
       if (auto mean = textures.get(m.emissive_texname, m.name)) out.emission *= *mean;
     }
-    translucent += m.dissolve < 1.0f;
+    // tinyobjloader reads `d` as dissolve and `Tr` as 1 - dissolve (`d` wins when both are given).
+    const float dissolve = static_cast<float>(m.dissolve);
+    if (std::isfinite(dissolve)) out.transmission = std::clamp(1.0f - dissolve, 0.0f, 1.0f);
+    if (!m.alpha_texname.empty() && out.transmission < 1.0f) {
+      AlphaMaps::Entry& e = alphaMaps.get(m.alpha_texname, m.name);
+      if (e.texture) {
+        e.texture->wrapU = e.texture->wrapV = wrapOf(m.alpha_texopt);
+        applyCutout(scene, out, *e.texture, 0.5f, e.slot);
+      }
+    }
     scene.materials.push_back(out);
   }
-  if (translucent > 0)
-    scene.warnings.push_back(path + ": " + std::to_string(translucent) +
-                             " material(s) with d < 1 treated as opaque");
   const uint32_t materialCount = static_cast<uint32_t>(scene.materials.size());
   uint32_t defaultMaterial = UINT32_MAX;
 
@@ -191,6 +242,7 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
   scene.triangles.reserve(total);
   scene.triangleMaterial.reserve(total);
   const size_t nv = scene.positions.size();
+  size_t cutoutWithoutUv = 0;
   for (const tinyobj::shape_t& shape : shapes) {
     const auto& idx = shape.mesh.indices;
     const size_t faces = idx.size() / 3;
@@ -214,10 +266,38 @@ Scene loadObj(const std::string& path, const MeshOptions& options) {
         }
         material = defaultMaterial;
       }
+      if (scene.materials[material].alphaTexture >= 0) {
+        glm::vec2 uv[3];
+        bool hasUv = true;
+        const tinyobj::material_t& om = objMaterials[material];
+        for (int k = 0; k < 3 && hasUv; ++k) {
+          const int t = idx[3 * f + static_cast<size_t>(k)].texcoord_index;
+          if (t < 0 || 2 * static_cast<size_t>(t) + 1 >= attrib.texcoords.size()) {
+            hasUv = false;
+            break;
+          }
+          // map_d -o / -s, then v flipped: OBJ's v runs up from the image's bottom row.
+          const float u = attrib.texcoords[2 * static_cast<size_t>(t)] * om.alpha_texopt.scale[0] +
+                          om.alpha_texopt.origin_offset[0];
+          const float v = attrib.texcoords[2 * static_cast<size_t>(t) + 1] * om.alpha_texopt.scale[1] +
+                          om.alpha_texopt.origin_offset[1];
+          uv[k] = glm::vec2(u, 1.0f - v);
+        }
+        if (hasUv) {
+          scene.cutoutTriangles.push_back(static_cast<uint32_t>(scene.triangles.size()));
+          scene.cutoutUvs.insert(scene.cutoutUvs.end(), uv, uv + 3);
+        } else {
+          ++cutoutWithoutUv;
+        }
+      }
       scene.triangles.push_back(tri);
       scene.triangleMaterial.push_back(material);
     }
   }
+  if (cutoutWithoutUv > 0)
+    scene.warnings.push_back(path + ": " + std::to_string(cutoutWithoutUv) +
+                             " face(s) with an alpha-textured (map_d) material have no texture coordinates; "
+                             "they are not cut out");
   return scene;
 }
 

@@ -169,7 +169,7 @@ void readVolume(const Reader& r, const json& j, const std::string& key, float sc
 
 void readMaterialOverride(const Reader& r, const std::string& name, const json& j, const std::string& key) {
   r.object(j, key);
-  r.checkKeys(j, key, {"albedo", "emission", "emission_scale"});
+  r.checkKeys(j, key, {"albedo", "emission", "emission_scale", "transmission"});
   bool found = false;
   for (Material& m : r.scene.materials) {
     if (m.name != name) continue;
@@ -184,6 +184,11 @@ void readMaterialOverride(const Reader& r, const std::string& name, const json& 
       const float s = r.number(j["emission_scale"], key + ".emission_scale");
       if (s < 0.0f) r.fail(key + ".emission_scale", "must be >= 0");
       m.emission *= s;
+    }
+    if (j.contains("transmission")) {
+      const float t = r.number(j["transmission"], key + ".transmission");
+      if (!(t >= 0.0f && t <= 1.0f)) r.fail(key + ".transmission", "must be in [0, 1]");
+      m.transmission = t;
     }
   }
   if (!found)

@@ -38,6 +38,30 @@ void validateScene(Scene& scene, const std::string& path);
 std::optional<glm::vec3> meanLinearColor(const unsigned char* bytes, std::size_t size, std::string& error);
 std::optional<glm::vec3> meanLinearColorFile(const std::filesystem::path& file, std::string& error);
 
+// Which channel of an image holds the alpha a cutout or a transmission map reads.
+enum class AlphaSource {
+  kAlphaElseOpaque,  // the alpha channel; 1 everywhere when the image has none (glTF base colour)
+  kAlphaElseFirst,   // the alpha channel; the first (grey or red) channel when there is none (OBJ map_d)
+  kFirst,            // the first channel (glTF transmissionTexture: red)
+};
+
+// One channel of an encoded image as a Scene alpha texture (8 bits a texel, taken as linear: alpha is not
+// sRGB-encoded; 16-bit images are reduced to 8 bits, Radiance .hdr clamped to [0,1]). Wrap modes are left at
+// repeat. Returns nullopt and sets `error` when the bytes cannot be decoded.
+std::optional<AlphaTexture> decodeAlpha(const unsigned char* bytes, std::size_t size, AlphaSource source,
+                                        std::string& error);
+std::optional<AlphaTexture> decodeAlphaFile(const std::filesystem::path& file, AlphaSource source,
+                                            std::string& error);
+
+// Mean alpha of a texture, in [0,1].
+float meanAlpha(const AlphaTexture& texture);
+
+// Makes `m` cut holes where `texture`'s alpha is below `cutoff`: when some texels are holes and some are not,
+// m.alphaTexture is set to `slot` (adding the texture to scene.alphaTextures the first time: slot < 0 on
+// entry); when every texel is a hole the material lets everything through (transmission 1, no texture);
+// when none is, nothing changes. Returns true when m now has a per-texel cutout.
+bool applyCutout(Scene& scene, Material& m, const AlphaTexture& texture, float cutoff, int32_t& slot);
+
 // IEC 61966-2-1 sRGB transfer function, encoded value in [0,1] -> linear.
 float srgbToLinear(float encoded);
 

@@ -162,6 +162,106 @@ std::optional<glm::vec3> meanLinearColorFile(const std::filesystem::path& file, 
   return mean;
 }
 
+std::optional<AlphaTexture> decodeAlpha(const unsigned char* bytes, std::size_t size, AlphaSource source,
+                                        std::string& error) {
+  if (bytes == nullptr || size == 0) {
+    error = "empty image data";
+    return std::nullopt;
+  }
+  if (size > static_cast<std::size_t>(INT32_MAX)) {
+    error = "image larger than 2 GiB";
+    return std::nullopt;
+  }
+  const int len = static_cast<int>(size);
+  int w = 0, h = 0, channels = 0;
+  AlphaTexture out;
+  // Which channel of a `channels`-channel texel to read, or -1 for "opaque".
+  auto pick = [source](int channels) {
+    const bool hasAlpha = channels == 2 || channels == 4;
+    if (source == AlphaSource::kFirst) return 0;
+    if (hasAlpha) return channels - 1;
+    return source == AlphaSource::kAlphaElseFirst ? 0 : -1;
+  };
+  auto fill = [&](auto* data, auto toByte) {
+    const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+    out.width = static_cast<uint32_t>(w);
+    out.height = static_cast<uint32_t>(h);
+    out.alpha.assign(n, 255);
+    const int c = pick(channels);
+    if (c < 0) return;
+    for (size_t i = 0; i < n; ++i) out.alpha[i] = toByte(data[i * static_cast<size_t>(channels) + size_t(c)]);
+  };
+  bool ok = false;
+  if (stbi_is_hdr_from_memory(bytes, len)) {
+    float* data = stbi_loadf_from_memory(bytes, len, &w, &h, &channels, 0);
+    if ((ok = data != nullptr && w > 0 && h > 0))
+      fill(data,
+           [](float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); });
+    stbi_image_free(data);
+  } else if (stbi_is_16_bit_from_memory(bytes, len)) {
+    stbi_us* data = stbi_load_16_from_memory(bytes, len, &w, &h, &channels, 0);
+    if ((ok = data != nullptr && w > 0 && h > 0))
+      fill(data, [](stbi_us v) {
+        return static_cast<uint8_t>((static_cast<unsigned>(v) * 255u + 32767u) / 65535u);
+      });
+    stbi_image_free(data);
+  } else {
+    stbi_uc* data = stbi_load_from_memory(bytes, len, &w, &h, &channels, 0);
+    if ((ok = data != nullptr && w > 0 && h > 0))
+      fill(data, [](stbi_uc v) { return static_cast<uint8_t>(v); });
+    stbi_image_free(data);
+  }
+  if (!ok) {
+    const char* reason = stbi_failure_reason();
+    error = std::string("cannot decode image: ") + (reason ? reason : "unknown format");
+    return std::nullopt;
+  }
+  return out;
+}
+
+std::optional<AlphaTexture> decodeAlphaFile(const std::filesystem::path& file, AlphaSource source,
+                                            std::string& error) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    error = "cannot open " + file.string();
+    return std::nullopt;
+  }
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto texture = decodeAlpha(bytes.data(), bytes.size(), source, error);
+  if (!texture)
+    error = file.string() + ": " + error;
+  else
+    texture->name = file.filename().string();
+  return texture;
+}
+
+float meanAlpha(const AlphaTexture& texture) {
+  if (texture.alpha.empty()) return 1.0f;
+  uint64_t sum = 0;
+  for (uint8_t a : texture.alpha) sum += a;
+  return static_cast<float>(static_cast<double>(sum) / (255.0 * static_cast<double>(texture.alpha.size())));
+}
+
+bool applyCutout(Scene& scene, Material& m, const AlphaTexture& texture, float cutoff, int32_t& slot) {
+  bool holes = false, solid = false;
+  for (uint8_t a : texture.alpha) {
+    (static_cast<float>(a) * (1.0f / 255.0f) < cutoff ? holes : solid) = true;
+    if (holes && solid) break;
+  }
+  if (!holes) return false;
+  if (!solid) {
+    m.transmission = 1.0f;
+    return false;
+  }
+  if (slot < 0) {
+    slot = static_cast<int32_t>(scene.alphaTextures.size());
+    scene.alphaTextures.push_back(texture);
+  }
+  m.alphaTexture = slot;
+  m.alphaCutoff = cutoff;
+  return true;
+}
+
 std::optional<std::filesystem::path> resolveTexturePath(const std::filesystem::path& baseDir,
                                                         const std::string& name) {
   if (name.empty()) return std::nullopt;

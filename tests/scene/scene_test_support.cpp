@@ -43,6 +43,14 @@ std::string writePng(const std::filesystem::path& file, int w, int h, const std:
   return file.string();
 }
 
+std::string writePngChannels(const std::filesystem::path& file, int w, int h, int channels,
+                             const std::vector<uint8_t>& texels) {
+  std::filesystem::create_directories(file.parent_path());
+  EXPECT_EQ(texels.size(), static_cast<size_t>(w * h * channels));
+  EXPECT_NE(stbi_write_png(file.string().c_str(), w, h, channels, texels.data(), w * channels), 0) << file;
+  return file.string();
+}
+
 std::string base64(const std::vector<uint8_t>& bytes) {
   static const char* alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;

@@ -21,6 +21,10 @@ std::string writeText(const std::filesystem::path& file, const std::string& text
 // Writes an 8-bit RGB PNG of w x h texels from `rgb` (3 bytes per texel).
 std::string writePng(const std::filesystem::path& file, int w, int h, const std::vector<uint8_t>& rgb);
 
+// Writes an 8-bit PNG of w x h texels with `channels` (1 grey, 2 grey+alpha, 3 RGB, 4 RGBA) bytes per texel.
+std::string writePngChannels(const std::filesystem::path& file, int w, int h, int channels,
+                             const std::vector<uint8_t>& texels);
+
 std::string base64(const std::vector<uint8_t>& bytes);
 
 // A .glb container: JSON chunk (space-padded) + BIN chunk (zero-padded).

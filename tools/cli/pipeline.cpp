@@ -55,6 +55,7 @@ std::string deringName(const DeringOptions& d) {
 // Clearance of probe positions (tetra/placement.h) from 64 rays of a fixed spherical Fibonacci set each:
 // hits and back-face hits for insideByRays(), escape = mean direction of rays that escaped or hit a front
 // face beyond `reach`, nearest hit and the side it faces. Per point, so any thread count gives the same.
+// Only opaque surfaces count: probes may sit behind or between glass panes (which enclose nothing).
 ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
   return [&tracer, threads](const std::vector<glm::dvec3>& pts, const std::vector<double>& reach) {
     constexpr int kRays = 64;
@@ -74,7 +75,7 @@ ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
           glm::dvec3 escape(0.0);
           for (const glm::vec3& d : dirs) {
             const Hit h =
-                tracer.intersect(glm::vec3(pts[i]), d, 0.0f, std::numeric_limits<float>::infinity());
+                tracer.intersect(glm::vec3(pts[i]), d, 0.0f, std::numeric_limits<float>::infinity(), 0.0f);
             hits += h.hit;
             back += h.hit && !h.frontFace;
             if (!h.hit || (h.frontFace && double(h.t) > reach[i])) escape += glm::dvec3(d);

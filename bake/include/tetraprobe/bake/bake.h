@@ -46,6 +46,8 @@ inline constexpr double kBakeErrorFloor = 1e-3;
 struct BakeStats {
   uint64_t intersectRays = 0;  // closest-hit queries (camera-less paths: one per path vertex)
   uint64_t occludedRays = 0;   // shadow (any-hit) queries: NEE of emissive triangles and punctual lights
+                               // (in a scene with transmission, shadow rays are closest-hit steps through
+                               // the glass and count as intersectRays instead)
   double seconds = 0.0;        // wall time of bakeProbes
   uint64_t paths = 0;          // paths traced over all probes
   int maxPathsPerProbe = 0;
@@ -64,7 +66,10 @@ struct BakeStats {
 // Per probe: options.samplesPerProbe directions (bakeSphereDirections keyed by the seed and the probe index),
 // incident radiance L(d) by path tracing (options.bounces, options.content), projected with projectToSh.
 // With kContentDirectPunctual, each unshadowed point/spot light adds (I spot / r^2) Y(d) and each unshadowed
-// sun E Y(d) (d towards the light, or the sun disc's centre) analytically: the delta's exact projection.
+// sun E Y(d) (d towards the light, or the sun disc's centre) analytically: the delta's exact projection,
+// times the transmittance of the shadow ray (SceneTracer::transmittance: glass in between scales it).
+// Transmissive surfaces (scene.h) are passed by paths with probability `transmission` drawn from the path's
+// own random stream, so the result stays bit-identical for any thread count.
 // Probes inside geometry are baked like any other (filter them with probesInsideGeometry).
 // options.shOrder 1 zeroes coefficients 4..8 after projection (0..3 are those of the L2 bake, bit for bit).
 // `stats`, when given, receives the ray counts and the wall time.
@@ -95,7 +100,8 @@ ShRgb projectToSh(const std::vector<glm::vec3>& dirs, const std::vector<glm::vec
 void addDeltaToSh(ShRgb& sh, const glm::vec3& dir, const glm::vec3& irradiance);
 
 // For each point, true when it is inside geometry: more than `backFaceFraction` of `rays` uniformly
-// distributed rays hit back faces (the Unity APV rule, 25 %). Deterministic.
+// distributed rays hit back faces of opaque surfaces (the Unity APV rule, 25 %; transmissive surfaces and
+// cutout holes are seen through: a glass case encloses nothing). Deterministic.
 std::vector<uint8_t> probesInsideGeometry(const SceneTracer& tracer, const std::vector<glm::dvec3>& points,
                                           int rays = 64, double backFaceFraction = 0.25, int threads = 0);
 
@@ -108,9 +114,9 @@ struct ReferenceIrradiance {
 // Ground-truth irradiance at a surface point with unit normal `normal` (the point is offset along the
 // normal by a small epsilon internally). `seed` makes it reproducible. Uses options.bounces/content.
 // Each of `samples` samples: NEE of the emissive triangles (MIS, power heuristic) + exact punctual
-// irradiance (I cos / r^2, sampled only for sun discs and light radii) + pi x the radiance of one
-// cosine-sampled path. Rays start at point + normal x tracer.rayEpsilon(); punctual distances and cosines
-// use the exact point. stderror = sample standard deviation / sqrt(samples) (per-sample variance).
+// irradiance (I cos / r^2 x shadow-ray transmittance, sampled only for sun discs and light radii) + pi x the
+// radiance of one cosine-sampled path. Rays start at point + normal x tracer.rayEpsilon(); punctual
+// distances and cosines use the exact point. stderror = sample standard deviation / sqrt(samples) (per-sample variance).
 // Single-threaded (callers parallelise over points). samples < 1 gives zeros with samples = 0. Throws
 // InputError for a non-finite point, a zero or non-finite normal, or bounces < 0.
 ReferenceIrradiance referenceIrradiance(const SceneTracer& tracer, const glm::dvec3& point,
@@ -145,7 +151,8 @@ std::vector<SurfacePoint> sampleCameraPoints(const SceneTracer& tracer, const st
 
 // `count` random points on the scene's surfaces, area-weighted, each on a side that faces open space
 // (points whose both sides are enclosed are skipped and redrawn). Deterministic for a given seed.
-// A side is open when at most 25 % of 32 uniform-hemisphere rays from the point (offset by
+// Points in alpha-cutout holes are redrawn (there is no surface there); the side test counts opaque
+// surfaces only. A side is open when at most 25 % of 32 uniform-hemisphere rays from the point (offset by
 // tracer.rayEpsilon() along that side's normal) hit back faces -- or, when the sky is black, hit back faces
 // or escape (the level is an interior and the void is its outside); the front side wins when both are open.
 // At most 20 x count draws: may return fewer than `count` points when most surface is enclosed.

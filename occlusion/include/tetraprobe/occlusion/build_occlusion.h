@@ -25,6 +25,12 @@ enum class OcclusionMode {
 bool parseOcclusionMode(const std::string& text, OcclusionMode& mode);
 const char* occlusionModeName(OcclusionMode mode);
 
+// Which surfaces are walls: those whose material transmission is at most this (scene.h). Visibility rays and
+// shadow-map depths step over the others (a window pane lets its light through, which is no leak; its
+// probes on both sides may interpolate across it), and they do not count as geometry cutting a tet. Alpha
+// cutout holes are never walls.
+inline constexpr float kOcclusionWallTransmission = 0.5f;
+
 struct OcclusionOptions {
   OcclusionMode mode = OcclusionMode::kAuto;
   double minAgreement = 0.95;  // auto: a representation is good enough when it answers at least this
