@@ -87,6 +87,7 @@ void renderTraced(const Args& args, const Scene& scene, const Level& level, cons
       "mean relative standard error %.2f %%\n",
       ref.samplesPerPixel, ref.passes, hits, view.width * view.height, ref.seconds,
       100.0 * ref.meanRelStderr());
+  std::fflush(stdout);  // the summary before the warning about it, also when both go to one pipe
   if (ref.meanRelStderr() > kNoisyReference)
     std::fprintf(stderr,
                  "tetraprobe render: warning: the reference is noisy (mean relative standard error %.0f %%, "
