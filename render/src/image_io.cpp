@@ -41,6 +41,25 @@ void appendToString(void* context, void* data, int size) {
   static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
 }
 
+// 8-bit sRGB RGB PNG of `image` (already checked): per channel toLinear01(x), clamped to [0, 1], sRGB-encoded.
+template <typename ToLinear01>
+bool encodePng(const std::string& path, const Image& image, std::string* error, ToLinear01 toLinear01) {
+  const size_t n = size_t(image.width) * size_t(image.height);
+  std::vector<unsigned char> rgb(n * 3);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const float mapped = srgbEncode(std::clamp(toLinear01(image.rgba[4 * i + c]), 0.0f, 1.0f));
+      rgb[3 * i + c] = static_cast<unsigned char>(std::lround(std::clamp(mapped, 0.0f, 1.0f) * 255.0f));
+    }
+  std::string bytes;
+  if (!stbi_write_png_to_func(appendToString, &bytes, image.width, image.height, 3, rgb.data(),
+                              image.width * 3)) {
+    if (error) *error = path + ": PNG encoding failed";
+    return false;
+  }
+  return writeFileAtomic(path, bytes, error);
+}
+
 }  // namespace
 
 float autoExposure(const Image& image) {
@@ -65,23 +84,16 @@ bool writePng(const std::string& path, const Image& image, float exposure, std::
     if (error) *error = path + ": exposure must be finite and >= 0";
     return false;
   }
-  const size_t n = size_t(image.width) * size_t(image.height);
-  std::vector<unsigned char> rgb(n * 3);
-  for (size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      float v = image.rgba[4 * i + c] * exposure;
-      v = std::isfinite(v) ? std::max(v, 0.0f) : (v > 0.0f ? 1e30f : 0.0f);
-      const float mapped = srgbEncode(v / (1.0f + v));
-      rgb[3 * i + c] = static_cast<unsigned char>(std::lround(std::clamp(mapped, 0.0f, 1.0f) * 255.0f));
-    }
-  }
-  std::string bytes;
-  if (!stbi_write_png_to_func(appendToString, &bytes, image.width, image.height, 3, rgb.data(),
-                              image.width * 3)) {
-    if (error) *error = path + ": PNG encoding failed";
-    return false;
-  }
-  return writeFileAtomic(path, bytes, error);
+  return encodePng(path, image, error, [exposure](float x) {
+    float v = x * exposure;
+    v = std::isfinite(v) ? std::max(v, 0.0f) : (v > 0.0f ? 1e30f : 0.0f);
+    return v / (1.0f + v);
+  });
+}
+
+bool writePngLinear(const std::string& path, const Image& image, std::string* error) {
+  if (!checkImage(image, error)) return false;
+  return encodePng(path, image, error, [](float x) { return std::isnan(x) ? 0.0f : x; });
 }
 
 bool writeExr(const std::string& path, const Image& image, std::string* error) {

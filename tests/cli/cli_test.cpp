@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -439,4 +440,51 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
   EXPECT_GT(lum(filled.out), 0.5 * ownRef) << filled.out;
   EXPECT_LT(lum(filled.out), 2.0 * ownRef) << filled.out;
   EXPECT_LT(lum(filled.out), farRef / 3.0) << filled.out;
+}
+
+// render --mode reference / error: traced on the CPU (no Vulkan needed), the error mode prints the gross
+// and dark-hole fractions on one line and writes them as JSON; .exr holds the values. The traced-only
+// options are refused in the Vulkan modes, and --exposure in the error mode (its scale is fixed).
+TEST_F(Cli, RenderReferenceAndErrorModesWriteImagesAndFigures) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string level = path("box.tpb").string();
+  ASSERT_EQ(run("bake " + path("box.obj").string() + " --samples 32 -o " + level).code, 0);
+  const std::string base = "render " + path("box.obj").string() + " " + level +
+                           " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24 --samples 8 --threads 2";
+  const CliRun ref = run(base + " --mode reference -o " + path("ref.png").string());
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  EXPECT_TRUE(fs::file_size(path("ref.png")) > 0);
+  EXPECT_NE(ref.out.find("8 paths per pixel"), std::string::npos) << ref.out;
+
+  const CliRun err =
+      run(base + " --mode error -o " + path("err.png").string() + " --json " + path("err.json").string());
+  ASSERT_EQ(err.code, 0) << err.err;
+  EXPECT_TRUE(fs::file_size(path("err.png")) > 0);
+  EXPECT_NE(err.out.find("gross (off by > 2x)"), std::string::npos) << err.out;
+  EXPECT_NE(err.out.find("dark holes (< 0.25x)"), std::string::npos) << err.out;
+  const auto j = nlohmann::json::parse(slurp(path("err.json")));
+  EXPECT_EQ(j.at("samples_per_pixel").get<int>(), 8);
+  EXPECT_EQ(j.at("bounces").get<std::string>(), "unbounded");
+  EXPECT_EQ(j.at("hit_pixels").get<int>(), 32 * 24) << "the camera is inside the closed box";
+  for (const char* key : {"gross_fraction", "dark_hole_fraction", "too_bright_fraction", "too_dark_fraction",
+                          "mean_log2_ratio"}) {
+    const double v = j.at("error").at(key).get<double>();
+    EXPECT_TRUE(std::isfinite(v)) << key;
+  }
+  EXPECT_GE(j.at("error").at("gross_fraction").get<double>(),
+            j.at("error").at("dark_hole_fraction").get<double>());
+
+  ASSERT_EQ(run(base + " --mode error -o " + path("err.exr").string()).code, 0);
+  EXPECT_TRUE(fs::file_size(path("err.exr")) > 0);
+
+  const std::string vk = "render " + path("box.obj").string() + " " + level + " -o " + path("x.png").string();
+  for (const std::string& bad :
+       {vk + " --mode irradiance --samples 8", vk + " --json " + path("x.json").string(),
+        vk + " --mode error --exposure 2", vk + " --mode error --bounces two",
+        vk + " --mode error --samples 0", vk + " --mode probes"}) {
+    const CliRun r = run(bad);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_EQ(lineCount(r.err), 1) << bad << "\n" << r.err;
+  }
 }

@@ -1,14 +1,22 @@
 // `tetraprobe render SCENE LEVEL.tpb -o IMAGE`: a view lit per pixel by the probes, rendered headless through
-// Vulkan (G-buffer raster, then the GLSL lookup pass of shaders/tetraprobe.glsl).
+// Vulkan (G-buffer raster, then the GLSL lookup pass of shaders/tetraprobe.glsl); or, at the same camera,
+// the path-traced reference irradiance (--mode reference) and the probes' error against it (--mode error),
+// both traced on the CPU with Embree (eval/reference_image.h, eval/error_image.h).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "args.h"
 #include "commands.h"
+#include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/eval/error_image.h"
+#include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/scene/load.h"
@@ -30,23 +38,146 @@ RenderMesh toRenderMesh(const Scene& scene) {
   return mesh;
 }
 
+// Options that only the traced modes (reference, error) take.
+constexpr const char* kTracedOnly[] = {"--samples", "--max-seconds", "--bounces",
+                                       "--seed",    "--threads",     "--json"};
+
+// Above this mean relative standard error the reference's own noise shows in the error image (0.1 is
+// about 0.14 stops per pixel).
+constexpr double kNoisyReference = 0.1;
+
+int parseBounces(const std::string& text) {
+  if (text == "unbounded") return kUnboundedBounces;
+  const double b = parseNumber(text, "--bounces");
+  if (!(b >= 0.0 && b <= double(kUnboundedBounces)) || b != std::floor(b))
+    throw UsageError("--bounces must be 'unbounded' or a whole number >= 0, not '" + text + "'");
+  return int(b);
+}
+
+// --mode reference / error: trace the reference at the view's pixels, write the image, print the summary.
+void renderTraced(const Args& args, const Scene& scene, const Level& level, const RenderView& view,
+                  const std::string& mode, const std::string& out) {
+  ReferenceImageOptions opt;
+  opt.samplesPerPixel = args.integer("--samples");
+  opt.maxSeconds = args.number("--max-seconds");
+  opt.bounces = parseBounces(args.str("--bounces"));
+  opt.content = level.content;
+  opt.seed = uint64_t(args.number("--seed"));
+  opt.threads = args.integer("--threads");
+  if (opt.samplesPerPixel < 1) throw UsageError("--samples must be at least 1");
+  if (!(opt.maxSeconds >= 0.0)) throw UsageError("--max-seconds must be >= 0");
+  if (opt.threads < 0) throw UsageError("--threads must be >= 0");
+  for (const auto& w : scene.warnings) std::fprintf(stderr, "tetraprobe render: warning: %s\n", w.c_str());
+
+  const SceneTracer tracer(scene);
+  const ReferenceImage ref = renderReferenceImage(tracer, view, opt);
+  const size_t hits = ref.gbuffer.hitCount();
+  nlohmann::json report = {{"mode", mode},
+                           {"width", view.width},
+                           {"height", view.height},
+                           {"hit_pixels", hits},
+                           {"samples_per_pixel", ref.samplesPerPixel},
+                           {"passes", ref.passes},
+                           {"bounces", opt.bounces == kUnboundedBounces ? nlohmann::json("unbounded")
+                                                                        : nlohmann::json(opt.bounces)},
+                           {"reference_seconds", ref.seconds},
+                           {"reference_mean_rel_stderr", ref.meanRelStderr()}};
+  std::printf(
+      "tetraprobe render: reference: %d paths per pixel (%d passes) at %zu of %d pixels in %.2fs; "
+      "mean relative standard error %.2f %%\n",
+      ref.samplesPerPixel, ref.passes, hits, view.width * view.height, ref.seconds,
+      100.0 * ref.meanRelStderr());
+  std::fflush(stdout);  // the summary before the warning about it, also when both go to one pipe
+  if (ref.meanRelStderr() > kNoisyReference)
+    std::fprintf(stderr,
+                 "tetraprobe render: warning: the reference is noisy (mean relative standard error %.0f %%, "
+                 "about %.2f stops in e per pixel): raise --samples before trusting single pixels\n",
+                 100.0 * ref.meanRelStderr(), ref.meanRelStderr() / std::log(2.0));
+
+  Image image;
+  image.width = view.width;
+  image.height = view.height;
+  image.rgba.assign(size_t(view.width) * size_t(view.height) * 4, 0.0f);
+  std::string error;
+  if (mode == "reference") {
+    for (size_t i = 0; i < ref.irradiance.size(); ++i) {
+      if (!ref.gbuffer.hit[i]) continue;
+      for (int c = 0; c < 3; ++c) image.rgba[4 * i + c] = ref.irradiance[i][c];
+      image.rgba[4 * i + 3] = 1.0f;
+    }
+    if (endsWith(out, ".exr")) {
+      if (!writeExr(out, image, &error)) throw std::runtime_error(error);
+    } else {
+      const float exposure =
+          args.str("--exposure") == "auto" ? autoExposure(image) : float(args.number("--exposure"));
+      if (!writePng(out, image, exposure, &error)) throw std::runtime_error(error);
+    }
+  } else {
+    const ProbeQuery query(level);
+    const std::vector<glm::vec3> lookup = probeLookupImage(query, ref.gbuffer, opt.threads);
+    const ErrorImage err = computeErrorImage(ref.gbuffer, lookup, ref.irradiance);
+    const ErrorStats& s = err.stats;
+    if (endsWith(out, ".exr")) {
+      if (!writeExr(out, errorValues(err), &error)) throw std::runtime_error(error);
+    } else if (!writePngLinear(out, errorHeatMap(err), &error)) {
+      throw std::runtime_error(error);
+    }
+    std::printf(
+        "tetraprobe render: error: gross (off by > 2x) %.2f %% (too bright %.2f %%, too dark %.2f %%), "
+        "dark holes (< 0.25x) %.2f %% of %zu pixels; mean log2(lookup/reference) %+.3f, mean |log2| "
+        "%.3f\n",
+        100.0 * s.gross, 100.0 * s.tooBright, 100.0 * s.tooDark, 100.0 * s.darkHoles, s.pixels, s.meanLog2,
+        s.meanAbsLog2);
+    report["error"] = {{"pixels", s.pixels},
+                       {"gross_fraction", s.gross},
+                       {"too_bright_fraction", s.tooBright},
+                       {"too_dark_fraction", s.tooDark},
+                       {"dark_hole_fraction", s.darkHoles},
+                       {"mean_log2_ratio", s.meanLog2},
+                       {"mean_abs_log2_ratio", s.meanAbsLog2},
+                       {"definition",
+                        "e = log2(max(Y(lookup), 0.01) / max(Y(reference), 0.01)), Y = Rec. 709 "
+                        "luminance of irradiance in W/m^2; gross: |e| > 1; dark hole: e < -2"},
+                       {"lookup", "CPU ProbeQuery::irradiance at the reference's hit points and normals"}};
+  }
+  if (args.has("--json")) writeJsonReport(args.str("--json"), report);
+  std::printf("tetraprobe render: %s (%dx%d, %s)\n", out.c_str(), view.width, view.height, mode.c_str());
+}
+
 }  // namespace
 
 int cmdRender(int argc, char** argv) {
-  Args args("tetraprobe render SCENE LEVEL.tpb -o IMAGE [options]",
-            "Renders the scene lit per pixel by the level's probes (headless Vulkan; lavapipe works).\n"
-            "IMAGE ending in .png is tone-mapped 8-bit sRGB; .exr is linear float RGBA.\n"
-            "Modes: irradiance = E in W/m^2 (the light content the probes hold); indirect = albedo * E / pi.",
-            {{"--output", "-o", "IMAGE", "image to write (.png or .exr)", ""},
-             {"--camera", "", "NAME",
-              "a camera named in the scene (default: the scene's first, else automatic)", ""},
-             {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
-             {"--target", "", "X,Y,Z", "point the camera looks at", ""},
-             {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
-             {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
-             {"--size", "", "WxH", "image size in pixels", "960x540"},
-             {"--mode", "", "irradiance|indirect", "what the pixels show", "indirect"},
-             {"--exposure", "", "auto|X", "PNG exposure multiplier before tone mapping", "auto"}});
+  Args args(
+      "tetraprobe render SCENE LEVEL.tpb -o IMAGE [options]",
+      "Renders the scene lit per pixel by the level's probes (headless Vulkan; lavapipe works).\n"
+      "IMAGE ending in .png is tone-mapped 8-bit sRGB; .exr is linear float RGBA.\n"
+      "Modes: irradiance = E in W/m^2 (the light content the probes hold); indirect = albedo * E / pi;\n"
+      "reference = the path-traced E (W/m^2, the level's light content) at the same pixels: the first\n"
+      "surface the pixel-centre ray meets (either face; Vulkan culls back faces), normal towards the\n"
+      "camera, --samples paths per pixel of unbounded depth (Russian roulette), on the CPU (Embree);\n"
+      "error = the probes' signed error against that reference, e = log2(max(Y(lookup), 0.01) /\n"
+      "max(Y(reference), 0.01)) (Y: luminance in W/m^2; lookup: the CPU ProbeQuery at the same points),\n"
+      "as a heat map with a fixed scale: e clamped to [-2, +2] (4x either way) through ColorBrewer RdBu,\n"
+      "dark blue = probes 4x too dark, white = right, dark red = 4x too bright. It prints the fraction\n"
+      "of pixels off by more than 2x either way (gross) and below 0.25x (dark holes).\n"
+      "Background pixels are black in every mode; reference and error need no GPU.\n"
+      "With .exr: reference = linear E, error = e (the same in r, g, b).",
+      {{"--output", "-o", "IMAGE", "image to write (.png or .exr)", ""},
+       {"--camera", "", "NAME", "a camera named in the scene (default: the scene's first, else automatic)",
+        ""},
+       {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
+       {"--target", "", "X,Y,Z", "point the camera looks at", ""},
+       {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
+       {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
+       {"--size", "", "WxH", "image size in pixels", "960x540"},
+       {"--mode", "", "irradiance|indirect|reference|error", "what the pixels show", "indirect"},
+       {"--exposure", "", "auto|X", "PNG exposure multiplier before tone mapping (not for error)", "auto"},
+       {"--samples", "", "N", "reference/error: paths per pixel", "64"},
+       {"--max-seconds", "", "S", "reference/error: stop after the pass that ends past S s (0 = none)", "0"},
+       {"--bounces", "", "unbounded|N", "reference/error: path depth", "unbounded"},
+       {"--seed", "", "N", "reference/error: random seed (same seed and passes: same image)", "1"},
+       {"--threads", "", "N", "reference/error: worker threads, 0 = all cores (never changes it)", "0"},
+       {"--json", "", "FILE", "reference/error: write the figures printed as JSON", ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   if (!args.has("--output")) throw UsageError("missing -o IMAGE");
@@ -61,10 +192,16 @@ int cmdRender(int argc, char** argv) {
   const std::string mode = args.str("--mode");
   if (mode == "irradiance")
     view.mode = RenderMode::kIrradiance;
-  else if (mode == "indirect")
+  else if (mode == "indirect" || mode == "reference" || mode == "error")
     view.mode = RenderMode::kIndirect;
   else
-    throw UsageError("--mode must be irradiance or indirect, not '" + mode + "'");
+    throw UsageError("--mode must be irradiance, indirect, reference or error, not '" + mode + "'");
+  const bool traced = mode == "reference" || mode == "error";
+  if (!traced)
+    for (const char* name : kTracedOnly)
+      if (args.has(name)) throw UsageError(std::string(name) + " applies to --mode reference and error only");
+  if (mode == "error" && args.has("--exposure"))
+    throw UsageError("--exposure does not apply to --mode error (its colour scale is fixed)");
 
   const Scene scene = loadScene(args.positional()[0]);
   Level level;
@@ -104,6 +241,11 @@ int cmdRender(int argc, char** argv) {
   }
   if (!(view.fovYDeg > 0.0f && view.fovYDeg < 179.0f)) throw UsageError("--fov must be in (0, 179) degrees");
   if (glm::length(view.target - view.eye) <= 0.0f) throw UsageError("camera eye and target coincide");
+
+  if (traced) {
+    renderTraced(args, scene, level, view, mode, out);
+    return 0;
+  }
 
   const ProbeQuery query(level);
   const auto t0 = std::chrono::steady_clock::now();

@@ -44,6 +44,13 @@ struct Image {
   std::vector<float> rgba;
 };
 
+// Unit world direction of the primary ray through image point (x, y) of `view`, in pixels from the image's
+// top-left corner (x right, y down: pixel (i, j)'s centre is (i + 0.5, j + 0.5)); the ray starts at view.eye.
+// The camera renderLevel rasterizes with: glm::lookAtRH(eye, target, up), a vertical field of view of
+// fovYDeg over view.height pixels, square pixels, row 0 = top. Computed in double; does not use view.mode.
+// For tracing the same pixels on the CPU (the path-traced reference image, eval/reference_image.h).
+glm::dvec3 pixelRayDirection(const RenderView& view, double x, double y);
+
 // Wall-clock and GPU times of one renderLevel call, milliseconds. GPU times come from timestamp queries (0
 // when the queue has none). lavapipe JIT-compiles shaders at the first draw/dispatch and runs dispatches
 // asynchronously (timestamps are taken after barriers): gbufferMs includes that compile; the lighting pass is
@@ -80,6 +87,11 @@ float autoExposure(const Image& image);
 // sRGB transfer function, rounded. Written atomically (tetraprobe::writeFileAtomic). Returns false and sets
 // `error` (one line) on failure.
 bool writePng(const std::string& path, const Image& image, float exposure, std::string* error);
+
+// Writes an 8-bit sRGB RGB PNG without tone mapping: per channel x clamped to [0, 1] (NaN -> 0), then the sRGB
+// transfer function, rounded. For false-colour images whose values are already display colours (linear RGB),
+// such as the error heat map. Written atomically. Returns false and sets `error` (one line) on failure.
+bool writePngLinear(const std::string& path, const Image& image, std::string* error);
 
 // Writes linear 32-bit float RGBA OpenEXR (ZIP compression) atomically. Returns false and sets `error`.
 bool writeExr(const std::string& path, const Image& image, std::string* error);
