@@ -11,6 +11,7 @@
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/eval/nearest_probe.h"
+#include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
@@ -176,14 +177,9 @@ std::vector<float> fallbackShares(const Level& level, const EvalReport& report) 
   std::vector<float> out(report.points.size(), 0.0f);
   if (level.occlusion.empty()) return out;
   const ProbeQuery query(level);
-  for (size_t i = 0; i < out.size(); ++i) {
-    const EvalPoint& p = report.points[i];
-    const Location loc = query.locate(p.surface.position);
-    if (loc.tet < 0) continue;
-    const glm::vec3 local(p.surface.position - level.origin);
-    applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, p.surface.normal),
-                   &out[i]);
-  }
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = occlusionFallbackShare(level, query, report.points[i].surface.position,
+                                    report.points[i].surface.normal);
   return out;
 }
 

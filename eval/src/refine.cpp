@@ -6,14 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
-#include <unordered_map>
-#include <unordered_set>
 
 #include <glm/geometric.hpp>
 
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
@@ -31,16 +29,6 @@ uint64_t mix(uint64_t x) {
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
   return x ^ (x >> 31);
-}
-
-struct CellHash {
-  size_t operator()(const glm::i64vec3& c) const {
-    return size_t(mix(uint64_t(c.x) ^ mix(uint64_t(c.y) ^ mix(uint64_t(c.z)))));
-  }
-};
-
-glm::i64vec3 cellOf(const glm::dvec3& p, double size) {
-  return glm::i64vec3(glm::floor(p / size));
 }
 
 }  // namespace
@@ -84,49 +72,18 @@ ErrorEstimate scoreRefinePoints(const Level& level, std::vector<RefinePoint>& po
 std::vector<glm::dvec3> proposeRefinement(const SceneTracer& tracer, const Level& level,
                                           const std::vector<RefinePoint>& points, size_t budget,
                                           double spacing, double minError) {
-  std::vector<glm::dvec3> out;
-  if (budget == 0 || !(spacing > 0.0)) return out;
+  if (budget == 0 || !(spacing > 0.0)) return {};
   std::vector<size_t> order(points.size());
   std::iota(order.begin(), order.end(), size_t(0));
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return points[a].error > points[b].error; });
-  // Existing probes within spacing / 10 (the placement's merge distance) of a proposal rule it out.
-  const double nearR = spacing / 10.0;
-  std::unordered_set<glm::i64vec3, CellHash> occupied, taken;
-  std::vector<glm::dvec3> all;
-  for (const glm::vec3& p : level.probes) all.push_back(glm::dvec3(p) + level.origin);
-  std::unordered_multimap<glm::i64vec3, size_t, CellHash> grid;
-  for (size_t i = 0; i < all.size(); ++i) grid.emplace(cellOf(all[i], nearR), i);
-  auto nearExisting = [&](const glm::dvec3& q) {
-    const glm::i64vec3 c = cellOf(q, nearR);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          auto [b, e] = grid.equal_range(c + glm::i64vec3(dx, dy, dz));
-          for (auto it = b; it != e; ++it)
-            if (glm::length(all[it->second] - q) < nearR) return true;
-        }
-    return false;
-  };
-  const float eps = tracer.rayEpsilon();
+  ProbesInFront proposals(tracer, level, spacing);
   FlushDenormalsScope ftz;
   for (size_t k : order) {
-    if (out.size() >= budget) break;
-    const RefinePoint& p = points[k];
-    if (!(p.error > minError)) break;
-    const glm::vec3 n = glm::normalize(p.surface.normal);
-    const Hit hit = tracer.intersect(glm::vec3(p.surface.position) + n * eps, n, 0.0f,
-                                     std::numeric_limits<float>::infinity());
-    const double free = hit.hit ? double(hit.t) : std::numeric_limits<double>::infinity();
-    const double d = std::min(spacing / 2.0, free / 2.0);
-    if (d < spacing / 50.0) continue;
-    const glm::dvec3 q = p.surface.position + glm::dvec3(n) * d;
-    if (!taken.insert(cellOf(q, spacing / 2.0)).second || nearExisting(q)) continue;
-    grid.emplace(cellOf(q, nearR), all.size());
-    all.push_back(q);
-    out.push_back(q);
+    if (proposals.probes().size() >= budget || !(points[k].error > minError)) break;
+    proposals.propose(points[k].surface.position, points[k].surface.normal);
   }
-  return out;
+  return proposals.probes();
 }
 
 }  // namespace tetraprobe

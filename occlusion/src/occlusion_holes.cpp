@@ -70,6 +70,45 @@ double surfaceArea(const Scene& scene) {
 
 }  // namespace
 
+struct ProbesInFront::Grids {
+  explicit Grids(double r) : near(r) {}
+  NearGrid near;
+  std::unordered_set<glm::i64vec3, CellHash> taken;
+};
+
+ProbesInFront::ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing)
+    : tracer_(tracer), spacing_(spacing), grids_(std::make_unique<Grids>(spacing / 10.0)) {
+  for (const glm::vec3& p : level.probes) grids_->near.add(glm::dvec3(p) + level.origin);
+}
+
+ProbesInFront::~ProbesInFront() = default;
+
+bool ProbesInFront::propose(const glm::dvec3& point, const glm::vec3& normal) {
+  const glm::vec3 n = glm::normalize(normal);
+  const Hit hit = tracer_.intersect(glm::vec3(point) + n * tracer_.rayEpsilon(), n, 0.0f,
+                                    std::numeric_limits<float>::infinity());
+  const double free = hit.hit ? double(hit.t) : std::numeric_limits<double>::infinity();
+  const double d = std::min(spacing_ / 2.0, free / 2.0);
+  if (d < spacing_ / 50.0) return false;
+  const glm::dvec3 probe = point + glm::dvec3(n) * d;
+  if (!grids_->taken.insert(cellOf(probe, spacing_ / 2.0)).second) return false;
+  if (grids_->near.near(probe)) return false;
+  grids_->near.add(probe);
+  probes_.push_back(probe);
+  return true;
+}
+
+float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
+                             const glm::vec3& normal) {
+  if (level.occlusion.empty()) return 0.0f;
+  const Location loc = query.locate(point);
+  if (loc.tet < 0) return 0.0f;
+  float fallback = 0.0f;
+  const glm::vec3 local(point - level.origin);
+  applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, normal), &fallback);
+  return fallback;
+}
+
 OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
                                   const OcclusionHoleOptions& options) {
   if (!(options.spacing > 0.0) || !std::isfinite(options.spacing))
@@ -83,32 +122,14 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   out.pointsChecked = points.size();
 
   const ProbeQuery query(level);
-  NearGrid existing(options.spacing / 10.0);
-  for (const glm::vec3& p : level.probes) existing.add(glm::dvec3(p) + level.origin);
-  std::unordered_set<glm::i64vec3, CellHash> taken;
-  const float eps = tracer.rayEpsilon();
+  ProbesInFront proposals(tracer, level, options.spacing);
   FlushDenormalsScope ftz;
   for (const SurfacePoint& sp : points) {
-    const Location loc = query.locate(sp.position);
-    if (loc.tet < 0) continue;
-    const glm::vec3 local(sp.position - level.origin);
-    float fallback = 0.0f;
-    applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, sp.normal),
-                   &fallback);
-    if (!(fallback > 0.0f)) continue;
+    if (!(occlusionFallbackShare(level, query, sp.position, sp.normal) > 0.0f)) continue;
     ++out.holePoints;
-    const glm::vec3 n = glm::normalize(sp.normal);
-    const Hit hit =
-        tracer.intersect(glm::vec3(sp.position) + n * eps, n, 0.0f, std::numeric_limits<float>::infinity());
-    const double free = hit.hit ? double(hit.t) : std::numeric_limits<double>::infinity();
-    const double d = std::min(options.spacing / 2.0, free / 2.0);
-    if (d < options.spacing / 50.0) continue;
-    const glm::dvec3 probe = sp.position + glm::dvec3(n) * d;
-    if (!taken.insert(cellOf(probe, options.spacing / 2.0)).second) continue;
-    if (existing.near(probe)) continue;
-    existing.add(probe);
-    out.probes.push_back(probe);
+    proposals.propose(sp.position, sp.normal);
   }
+  out.probes = proposals.probes();
   return out;
 }
 

@@ -8,10 +8,13 @@
 #include <cstdint>
 #include <vector>
 
+#include <memory>
+
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
 
@@ -29,11 +32,35 @@ struct OcclusionHoles {
   std::vector<glm::dvec3> probes;  // new probe positions, world metres, deterministic order
 };
 
+// New probes in front of surface points, shared by hole filling and error-driven refinement (eval/refine.h):
+// a proposal for point p with unit normal n sits at p + n x d, d = min(spacing / 2, half the free distance
+// along n), so it stays on the point's side of nearby geometry; refused when d < spacing / 50 (no room), when
+// an earlier proposal took its spacing / 2 grid cell, or when a probe of `level` or an earlier proposal lies
+// within spacing / 10 (the placement's merge distance). Deterministic: proposals are judged in call order.
+class ProbesInFront {
+ public:
+  ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing);
+  ~ProbesInFront();
+  // True (and the position appended to probes()) when the proposal for the point is taken.
+  bool propose(const glm::dvec3& point, const glm::vec3& normal);
+  const std::vector<glm::dvec3>& probes() const { return probes_; }
+
+ private:
+  struct Grids;
+  const SceneTracer& tracer_;
+  double spacing_;
+  std::vector<glm::dvec3> probes_;
+  std::unique_ptr<Grids> grids_;
+};
+
+// The share of the all-occluded fallback in the `tet` answer at a world point with normal `normal`
+// (applyOcclusion's `fallback`, runtime/occlusion.h): 0 where the point sees some of its tet's probes.
+// 0 for a level without occlusion or a point with no tet.
+float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
+                             const glm::vec3& normal);
+
 // Finds the holes of `level` (which must store occlusion; none: an empty result) at area-uniform surface
-// points and proposes one probe per hole cell: at point + normal x d with d = min(spacing / 2, half the free
-// distance along the normal), skipped when d < spacing / 50 (no room) or when an existing probe or an earlier
-// proposal lies within spacing / 10 (the placement's merge distance); proposals de-duplicated on a grid of
-// spacing / 2 (the first point of a cell, in draw order, wins). Deterministic. Throws InputError for a
+// points and proposes a probe in front of each hole point (ProbesInFront, in draw order). Deterministic. Throws InputError for a
 // non-positive or non-finite spacing.
 OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
                                   const OcclusionHoleOptions& options);
