@@ -249,6 +249,7 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
   const bool adaptive = options.targetRelError > 0.0;
   std::vector<int> paths(probes.size(), options.samplesPerProbe);
   std::vector<double> achieved;
+  uint64_t budgetPaths = 0;
   if (!adaptive) {
     if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
     parallelFor(probes.size(), options.threads, [&](size_t i) {
@@ -311,16 +312,54 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
         while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
           addBatch(tracer, glm::vec3(probes[i]), i, options, st);
         achieved[i] = adaptiveRelError(st, floor);
-        out[i] = adaptiveSh(tracer, glm::vec3(probes[i]), options, st);
       });
       paths[i] = state[i].batches * kBakeBatchSize;
       if (progress) progress->advance();
+    });
+    if (progress) progress->finish();
+    // Pass 3 (BakeOptions::pathBudget): the unspent budget shared evenly among the probes above the target.
+    uint64_t used = 0;
+    for (size_t i = 0; i < probes.size(); ++i) used += skipped(i) ? 0 : uint64_t(state[i].batches);
+    const uint64_t budgetBatches = options.pathBudget / kBakeBatchSize;
+    const int ceilingBatches = maxBatches * kBakeBudgetCapFactor;
+    const uint64_t usedBefore = used;
+    for (int round = 0; round < 8 && used < budgetBatches; ++round) {
+      std::vector<size_t> open;
+      for (size_t i = 0; i < probes.size(); ++i)
+        if (!skipped(i) && achieved[i] > options.targetRelError && state[i].batches < ceilingBatches)
+          open.push_back(i);
+      if (open.empty()) break;
+      const uint64_t share = (budgetBatches - used) / open.size();
+      if (share == 0) break;
+      if (options.progress)
+        progress = std::make_unique<Progress>("bake (path budget)", open.size(), "probes");
+      parallelFor(open.size(), options.threads, [&](size_t k) {
+        const size_t i = open[k];
+        run(i, [&] {
+          DenormalScope denormals;
+          AdaptiveProbe& st = state[i];
+          const int stop = int(std::min<uint64_t>(uint64_t(ceilingBatches), uint64_t(st.batches) + share));
+          while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
+            addBatch(tracer, glm::vec3(probes[i]), i, options, st);
+          achieved[i] = adaptiveRelError(st, floor);
+        });
+        paths[i] = state[i].batches * kBakeBatchSize;
+        if (progress) progress->advance();
+      });
+      if (progress) progress->finish();
+      used = 0;
+      for (size_t i = 0; i < probes.size(); ++i) used += skipped(i) ? 0 : uint64_t(state[i].batches);
+    }
+    budgetPaths = (used - usedBefore) * kBakeBatchSize;
+    parallelFor(probes.size(), options.threads, [&](size_t i) {
+      if (!skipped(i)) run(i, [&] { out[i] = adaptiveSh(tracer, glm::vec3(probes[i]), options, state[i]); });
     });
   }
   if (progress) progress->finish();
   truncateShOrder(out, options.shOrder);
   if (stats) {
     *stats = BakeStats{};
+    stats->budgetPaths = budgetPaths;
     for (const RayTap& t : taps) {
       stats->intersectRays += t.intersects;
       stats->occludedRays += t.occludeds;

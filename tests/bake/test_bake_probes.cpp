@@ -327,6 +327,47 @@ TEST(AdaptiveSampling, ReachesTargetErrorOnClosedForm) {
   EXPECT_EQ(std::memcmp(single.data(), sh.data(), sh.size() * sizeof(ShRgb)), 0);
 }
 
+// The path budget: probes that stop at maxSamplesPerProbe above the target get the unspent paths, reach the
+// target that the cap alone misses, never spend more than the budget (plus one batch per probe of rounding),
+// and the result stays bit-identical for any thread count.
+TEST(AdaptiveSampling, PathBudgetConvergesProbesStoppedAtTheCap) {
+  Scene s;
+  const float a = 0.5f;
+  test::addSphere(s, glm::vec3(0.0f), 1.0f, true, test::addMaterial(s, glm::vec3(a), glm::vec3(1.0f)));
+  SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes;
+  for (int i = 0; i < 8; ++i) probes.emplace_back(0.3 * std::sin(i * 1.3), 0.3 * std::cos(i * 0.7), 0.0);
+  BakeOptions capped = quiet(kUnboundedBounces, 128, kContentAll);
+  capped.targetRelError = 0.01;
+  capped.maxSamplesPerProbe = 256;
+  BakeStats cappedStats;
+  bakeProbes(tracer, probes, capped, &cappedStats);
+  ASSERT_EQ(cappedStats.probesAtCap, probes.size()) << "the cap alone must stop every probe above 1 %";
+  EXPECT_EQ(cappedStats.budgetPaths, 0u);
+
+  BakeOptions budget = capped;
+  budget.pathBudget = 400000;
+  BakeStats stats;
+  const std::vector<ShRgb> sh = bakeProbes(tracer, probes, budget, &stats);
+  EXPECT_EQ(stats.probesAtCap, 0u) << "max achieved " << stats.maxRelError;
+  EXPECT_LE(stats.maxRelError, 0.01);
+  EXPECT_GT(stats.budgetPaths, 0u);
+  EXPECT_LE(stats.paths, budget.pathBudget + probes.size() * kBakeBatchSize);
+  EXPECT_LE(stats.maxPathsPerProbe, kBakeBudgetCapFactor * capped.maxSamplesPerProbe);
+
+  BakeOptions small = capped;  // a budget below what the caps spend changes nothing
+  small.pathBudget = 1000;
+  BakeStats smallStats;
+  bakeProbes(tracer, probes, small, &smallStats);
+  EXPECT_EQ(smallStats.paths, cappedStats.paths);
+
+  BakeOptions one = budget;
+  one.threads = 1;
+  const std::vector<ShRgb> single = bakeProbes(tracer, probes, one);
+  ASSERT_EQ(single.size(), sh.size());
+  EXPECT_EQ(std::memcmp(single.data(), sh.data(), sh.size() * sizeof(ShRgb)), 0);
+}
+
 // Bad adaptive options are typed input errors.
 TEST(AdaptiveSampling, RejectsNegativeTargetAndCapBelowMinimum) {
   Scene s;

@@ -48,6 +48,11 @@ int cmdBake(int argc, char** argv) {
         "is at most E x its mean (0 = exactly --samples paths)",
         "0.02"},
        {"--max-samples", "", "N", "adaptive sampling: paths per probe at most", "8192"},
+       {"--path-budget", "", "N",
+        "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "
+        "and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), so a small "
+        "level converges; 0 = none",
+        "16000000"},
        {"--content", "", "default|all",
         "default: everything but light arriving directly from point/spot/sun lights (drawn in real "
         "time); all: that too",
@@ -74,9 +79,10 @@ int cmdBake(int argc, char** argv) {
         "1"},
        {"--probe-budget", "", "N|auto",
         "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
-        "error against the path-traced oracle is largest; auto = 10 % of the placed probes (shell probes not "
-        "counted); 0 = none",
-        "0"},
+        "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
+        "the "
+        "placed probes (shell probes not counted), at least 256; 0 = none",
+        "auto"},
        {"--refine-points", "", "N",
         "refinement: surface points the error is measured at (twice: select, check)", "2048"},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
@@ -133,6 +139,10 @@ int cmdBake(int argc, char** argv) {
   if (opt.bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
   opt.bake.targetRelError = args.number("--noise");
   opt.bake.maxSamplesPerProbe = args.integer("--max-samples");
+  const double pathBudget = args.number("--path-budget");
+  if (!(pathBudget >= 0.0 && pathBudget <= 1e15))
+    throw UsageError("--path-budget must be a number of paths in [0, 1e15]");
+  opt.bake.pathBudget = uint64_t(pathBudget);
   if (!(opt.bake.targetRelError >= 0.0) || !std::isfinite(opt.bake.targetRelError))
     throw UsageError("--noise must be a finite number >= 0");
   if (opt.bake.targetRelError > 0.0 && opt.bake.maxSamplesPerProbe < opt.bake.samplesPerProbe)
@@ -209,9 +219,9 @@ int cmdBake(int argc, char** argv) {
     if (opt.bake.targetRelError > 0.0)
       std::printf(
           "  noise   target %.3g: achieved relative stderr mean %.4f, p95 %.4f, max %.4f; %zu probes "
-          "above target at the cap\n",
+          "above target at the cap; %llu paths from the path budget\n",
           opt.bake.targetRelError, stats.bake.meanRelError, stats.bake.p95RelError, stats.bake.maxRelError,
-          stats.bake.probesAtCap);
+          stats.bake.probesAtCap, (unsigned long long)stats.bake.budgetPaths);
   }
   std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
               opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
@@ -316,7 +326,9 @@ int cmdBake(int argc, char** argv) {
                    {"mean_rel_stderr", stats.bake.meanRelError},
                    {"p95_rel_stderr", stats.bake.p95RelError},
                    {"max_rel_stderr", stats.bake.maxRelError},
-                   {"probes_above_target", stats.bake.probesAtCap}}},
+                   {"probes_above_target", stats.bake.probesAtCap},
+                   {"path_budget", opt.bake.pathBudget},
+                   {"budget_paths", stats.bake.budgetPaths}}},
                  {"imported", stats.importedProbes > 0}};
     j["occlusion"] = {{"mode", occlusionModeName(opt.occlusion.mode)},
                       {"none", level.occlusion.empty() ? level.tets.size() : stats.occlusion.none},

@@ -305,11 +305,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     level.cellGrid = buildCellGrid(level.probes, level.tets);
     BakeOptions bake = options.bake;
     bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
+    // The path budget is the whole bake's: added probes get what the earlier passes left.
+    bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
     BakeStats more;
     std::vector<ShRgb> sh = bakeProbes(tracer, added, bake, &more);
     stats.bake.intersectRays += more.intersectRays;
     stats.bake.occludedRays += more.occludedRays;
     stats.bake.paths += more.paths;
+    stats.bake.budgetPaths += more.budgetPaths;
     stats.bake.seconds += more.seconds;
     stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
     deringProbes(sh, dering);
@@ -335,8 +338,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
 
   // Error-driven refinement (eval/refine.h): the lookup's error against the oracle at area-uniform surface
   // points; probes in front of the worst, up to the budget; the error measured again on an independent draw.
-  const int budget =
-      options.probeBudget >= 0 ? options.probeBudget : int(0.1 * double(probes.size() - shell.size()));
+  // auto: a quarter of the placed probes (shell probes not counted), at least kAutoRefineMin: a small level's
+  // rooms hold few probes at the default spacing, and that is where 1 m probes resolve the light worst.
+  constexpr int kAutoRefineMin = 256;
+  const int budget = options.probeBudget >= 0
+                         ? options.probeBudget
+                         : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));
   if (budget > 0 && baked) {
     RefineOptions ro;
     ro.spacing = options.spacing;
@@ -368,7 +375,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
                                        : options.shellSpacing)
       << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
       << "; target_error=" << options.bake.targetRelError
-      << "; max_samples=" << options.bake.maxSamplesPerProbe
+      << "; max_samples=" << options.bake.maxSamplesPerProbe << "; path_budget=" << options.bake.pathBudget
       << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
       << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)
       << "; occlusion=" << occlusionModeName(options.occlusion.mode)

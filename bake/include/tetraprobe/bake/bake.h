@@ -32,6 +32,12 @@ struct BakeOptions {
   // maxSamplesPerProbe paths. 0 = exactly samplesPerProbe paths in one set (no error estimate).
   double targetRelError = 0.0;
   int maxSamplesPerProbe = 8192;
+  // Adaptive sampling: paths the whole call may spend (0 = no more than each probe's maxSamplesPerProbe).
+  // When the probes that reached their target and those stopped at maxSamplesPerProbe together used fewer, the
+  // rest is shared out evenly among the probes still above the target, in rounds (each probe at most
+  // kBakeBudgetCapFactor x maxSamplesPerProbe paths), so a small level whose light arrives through a gap
+  // converges instead of stopping at the cap. The shares depend only on path counts, never on threads.
+  uint64_t pathBudget = 0;
   int threads = 0;                      // 0 = all cores; never changes the result
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
@@ -42,6 +48,7 @@ struct BakeOptions {
 // What a bake cost. Ray counts are summed per probe, so they are identical for any thread count.
 inline constexpr int kBakeBatchSize = 64;
 inline constexpr double kBakeErrorFloor = 1e-3;
+inline constexpr int kBakeBudgetCapFactor = 16;  // BakeOptions::pathBudget: per-probe ceiling, x maxSamples
 
 struct BakeStats {
   uint64_t intersectRays = 0;  // closest-hit queries (camera-less paths: one per path vertex)
@@ -56,6 +63,7 @@ struct BakeStats {
   // cap above the target.
   double meanRelError = 0.0, p95RelError = 0.0, maxRelError = 0.0;
   size_t probesAtCap = 0;
+  uint64_t budgetPaths = 0;  // paths spent from BakeOptions::pathBudget beyond the per-probe caps
   uint64_t rays() const { return intersectRays + occludedRays; }
   double raysPerSecond() const { return seconds > 0.0 ? double(rays()) / seconds : 0.0; }
 };
