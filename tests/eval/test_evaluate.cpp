@@ -19,7 +19,8 @@ constexpr double kPi = std::numbers::pi;
 // Four points with references well above the 0.01 W/m^2 floor, one of them lit only indirectly.
 EvalReport handBuiltReport() {
   EvalReport report;
-  const glm::vec3 refs[4] = {{1.0f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, {4.0f, 1.0f, 0.25f}, {10.0f, 8.0f, 6.0f}};
+  const glm::vec3 refs[4] = {
+      {1.0f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, {4.0f, 1.0f, 0.25f}, {10.0f, 8.0f, 6.0f}};
   for (int i = 0; i < 4; ++i) {
     EvalPoint p;
     p.surface.position = glm::dvec3(i, 0.0, 0.0);

@@ -23,7 +23,8 @@ ShRgb linearSh(const glm::dvec3& p) {
   ShRgb s;
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int ch = 0; ch < 3; ++ch)
-      s.c[size_t(i)][ch] = float(0.1 * (i + 1) + 0.3 * ch + (0.5 + 0.1 * i) * p.x - 0.2 * ch * p.y + 0.05 * i * p.z);
+      s.c[size_t(i)][ch] =
+          float(0.1 * (i + 1) + 0.3 * ch + (0.5 + 0.1 * i) * p.x - 0.2 * ch * p.y + 0.05 * i * p.z);
   return s;
 }
 
@@ -42,7 +43,8 @@ TEST(GridVolume, TrilinearReproducesLinearFieldExactly) {
     const ShRgb got = grid.blend(p), want = linearSh(p);
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int ch = 0; ch < 3; ++ch)
-        ASSERT_NEAR(got.c[size_t(i)][ch], want.c[size_t(i)][ch], 2e-5 * (1.0 + std::abs(want.c[size_t(i)][ch])))
+        ASSERT_NEAR(got.c[size_t(i)][ch], want.c[size_t(i)][ch],
+                    2e-5 * (1.0 + std::abs(want.c[size_t(i)][ch])))
             << "coefficient " << i << " channel " << ch << " at " << p.x << "," << p.y << "," << p.z;
   }
   // Outside: clamped to the box.
@@ -98,7 +100,8 @@ TEST(GridLayout, BytesFitTheBudgetAndAreTheFinestThatDo) {
     }
     uint64_t finer = 1;
     for (int a = 0; a < 3; ++a)
-      finer *= uint64_t(std::max<int64_t>(2, int64_t(std::ceil((hi[a] - lo[a]) / (0.99 * l.step) - 1e-9)) + 1));
+      finer *=
+          uint64_t(std::max<int64_t>(2, int64_t(std::ceil((hi[a] - lo[a]) / (0.99 * l.step) - 1e-9)) + 1));
     EXPECT_GT(kGridHeaderBytes + 108 * finer, budget) << "budget " << budget << ": a finer lattice also fits";
   }
   // At the probe count: at most that many nodes.
@@ -190,12 +193,13 @@ TEST(GridRender, GpuPassMatchesCpuLookup) {
   size_t checked = 0;
   for (size_t i = 0; i < size_t(view.width * view.height); ++i) {
     if (r.position.rgba[4 * i + 3] == 0.0f) continue;
-    const glm::dvec3 world = origin + glm::dvec3(r.position.rgba[4 * i], r.position.rgba[4 * i + 1],
-                                                 r.position.rgba[4 * i + 2]);
+    const glm::dvec3 world =
+        origin + glm::dvec3(r.position.rgba[4 * i], r.position.rgba[4 * i + 1], r.position.rgba[4 * i + 2]);
     const glm::vec3 n(r.normal.rgba[4 * i], r.normal.rgba[4 * i + 1], r.normal.rgba[4 * i + 2]);
     const glm::vec3 want = grid.irradiance(world, n);
     for (int c = 0; c < 3; ++c)
-      ASSERT_NEAR(r.color.rgba[4 * i + size_t(c)], want[c], 1e-4 * (1.0 + std::abs(want[c]))) << "pixel " << i;
+      ASSERT_NEAR(r.color.rgba[4 * i + size_t(c)], want[c], 1e-4 * (1.0 + std::abs(want[c])))
+          << "pixel " << i;
     ++checked;
   }
   EXPECT_GT(checked, size_t(view.width * view.height / 2));

@@ -122,8 +122,8 @@ LevelUnderTest prepareLevel(std::shared_ptr<Level> level, const EvalSetup& setup
       char buf[256];
       std::snprintf(buf, sizeof buf,
                     "%s: %dx%dx%d nodes of %.3g m, %zu inside geometry (dilated), %s; baked in %.1fs",
-                    name.c_str(), layout.dims.x, layout.dims.y, layout.dims.z, layout.step, stats.invalidNodes,
-                    mb(grid->bytes()).c_str(), stats.seconds);
+                    name.c_str(), layout.dims.x, layout.dims.y, layout.dims.z, layout.step,
+                    stats.invalidNodes, mb(grid->bytes()).c_str(), stats.seconds);
       out.notes.push_back(buf);
       Candidate c{gridMethod(grid, name), {}};
       c.gpu = [&setup, grid](const RenderView& v) {
@@ -146,8 +146,9 @@ struct Measured {
 };
 
 // CPU timings in both orders and the GPU pass (median of `gpuRuns` renders; -1 when not measured).
-std::vector<Measured> measure(const LevelUnderTest& lut, const TimingPoints& coherent, const TimingPoints& random,
-                              int threads, const RenderView* gpuView, int gpuRuns, std::string* gpuError) {
+std::vector<Measured> measure(const LevelUnderTest& lut, const TimingPoints& coherent,
+                              const TimingPoints& random, int threads, const RenderView* gpuView, int gpuRuns,
+                              std::string* gpuError) {
   std::vector<Measured> out;
   for (const Candidate& c : lut.candidates) {
     Measured m;
@@ -216,12 +217,12 @@ std::string markdownTable(const EvalReport& report) {
   for (const MethodResult& m : report.methods) {
     char gpu[32] = "-";
     if (m.gpuMs >= 0.0) std::snprintf(gpu, sizeof gpu, "%.1f", m.gpuMs);
-    std::snprintf(buf, sizeof buf,
-                  "| %s | %.1f %% | %.2f %% | %.3f | %.2f | %.3f | %.3f | %s | %.0f | %llu | %.1f | %.1f | %s |\n",
-                  m.name.c_str(), 100.0 * m.grossError, 100.0 * m.darkHoles, m.meanRelError, m.p95RelError,
-                  m.relmse, m.leakIndirect, mb(m.bytes).c_str(),
-                  m.probes > 0 ? double(m.bytes) / double(m.probes) : 0.0, (unsigned long long)m.probes,
-                  m.cpuNsCoherent, m.cpuNsRandom, gpu);
+    std::snprintf(
+        buf, sizeof buf,
+        "| %s | %.1f %% | %.2f %% | %.3f | %.2f | %.3f | %.3f | %s | %.0f | %llu | %.1f | %.1f | %s |\n",
+        m.name.c_str(), 100.0 * m.grossError, 100.0 * m.darkHoles, m.meanRelError, m.p95RelError, m.relmse,
+        m.leakIndirect, mb(m.bytes).c_str(), m.probes > 0 ? double(m.bytes) / double(m.probes) : 0.0,
+        (unsigned long long)m.probes, m.cpuNsCoherent, m.cpuNsRandom, gpu);
     md << buf;
   }
   return md.str();
@@ -279,7 +280,8 @@ int cmdEval(int argc, char** argv) {
       "tetraprobe eval SCENE LEVEL.tpb [options]",
       "Path-traces reference irradiance at random surface points (same light content as the level)\n"
       "and compares each lookup method with it: the level's tet lookup, the nearest probe, and a regular\n"
-      "SH L2 grid baked the same way at the level's bytes and at its probe count. Error, memory and run time\n"
+      "SH L2 grid baked the same way at the level's bytes and at its probe count. Error, memory and run "
+      "time\n"
       "are defined in docs/evaluation.md.",
       {{"--points", "", "N", "random surface points", "512"},
        {"--samples", "", "N", "reference paths per point", "4096"},
@@ -340,7 +342,8 @@ int cmdEval(int argc, char** argv) {
     throw UsageError("--timing-size must be WxH with 1..16384 pixels a side");
   const std::string gpuArg = args.str("--gpu");
   if (gpuArg != "auto" && gpuArg != "none") throw UsageError("--gpu must be auto or none");
-  const std::vector<double> sweep = args.has("--sweep") ? parseSweep(args.str("--sweep")) : std::vector<double>{};
+  const std::vector<double> sweep =
+      args.has("--sweep") ? parseSweep(args.str("--sweep")) : std::vector<double>{};
 
   const Scene scene = loadScene(args.positional()[0]);
   auto level = std::make_shared<Level>();
@@ -389,9 +392,9 @@ int cmdEval(int argc, char** argv) {
     for (const Candidate& c : lut.candidates) scoreMethod(report, c.method);
 
   // Timing: the same query points for every method, coherent (a camera's pixels in order) and shuffled.
-  const TimingPoints coherent = scene.cameras.empty()
-                                    ? mortonTimingPoints(reports[0])
-                                    : cameraTimingPoints(tracer, scene.cameras[0], timingW, timingH, opt.threads);
+  const TimingPoints coherent =
+      scene.cameras.empty() ? mortonTimingPoints(reports[0])
+                            : cameraTimingPoints(tracer, scene.cameras[0], timingW, timingH, opt.threads);
   const TimingPoints random = shuffledTimingPoints(coherent, opt.seed ^ 0x7193ull);
   RenderView gpuView;
   gpuView.width = 1280;
@@ -436,10 +439,11 @@ int cmdEval(int argc, char** argv) {
     for (const ByteSection& s : tet.sections)
       std::printf(" %s %.0f", s.name.c_str(), tet.probes ? double(s.bytes) / double(tet.probes) : 0.0);
     std::printf(" bytes/probe\n");
-    std::printf("tetraprobe eval: CPU timing on %d threads over %zu points (%s; and shuffled), median of 7; GPU "
-                "%s\n",
-                resolveThreads(opt.threads), coherent.position.size(), coherent.order.c_str(),
-                gpu && gpuError.empty() ? "1280x720 lighting pass, median of 3" : "not measured");
+    std::printf(
+        "tetraprobe eval: CPU timing on %d threads over %zu points (%s; and shuffled), median of 7; GPU "
+        "%s\n",
+        resolveThreads(opt.threads), coherent.position.size(), coherent.order.c_str(),
+        gpu && gpuError.empty() ? "1280x720 lighting pass, median of 3" : "not measured");
   }
   const std::string depth = opt.referenceBounces == kUnboundedBounces ? std::string("unbounded")
                                                                       : std::to_string(opt.referenceBounces);
@@ -466,8 +470,8 @@ int cmdEval(int argc, char** argv) {
           "  %zu points see none of their tet's probes (occlusion fallback): %zu of them gross, %zu dark\n",
           fallback, gross, dark);
     }
-    std::printf("  %-18s %8s %8s %8s %8s %8s %8s %8s %10s %9s %9s %8s\n", "method", "gross", "dark", "mean_rel",
-                "p95_rel", "relmse", "leak", "leak_ind", "bytes", "ns coh", "ns rand", "gpu ms");
+    std::printf("  %-18s %8s %8s %8s %8s %8s %8s %8s %10s %9s %9s %8s\n", "method", "gross", "dark",
+                "mean_rel", "p95_rel", "relmse", "leak", "leak_ind", "bytes", "ns coh", "ns rand", "gpu ms");
     for (const auto& m : report.methods)
       std::printf("  %-18s %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f %10llu %9.1f %9.1f %8.1f\n",
                   m.name.c_str(), m.grossError, m.darkHoles, m.meanRelError, m.p95RelError, m.relmse, m.leak,
@@ -484,13 +488,19 @@ int cmdEval(int argc, char** argv) {
   for (const double spacing : sweep) {
     PipelineStats stats;
     const PipelineOptions po = sweepOptions(*level, spacing, opt.threads);
-    auto swept = std::make_shared<Level>(buildLevel(scene, po, stats));
+    std::shared_ptr<Level> swept;
+    try {
+      swept = std::make_shared<Level>(buildLevel(scene, po, stats));
+    } catch (const InputError& e) {  // e.g. a spacing coarser than the level: skip it, keep the others
+      std::printf("tetraprobe eval: sweep spacing %g m skipped: %s\n", spacing, e.what());
+      continue;
+    }
     const LevelUnderTest s = prepareLevel(swept, setup);
     EvalReport r = reports[0];
     r.methods.clear();
     for (const Candidate& c : s.candidates) scoreMethod(r, c.method);
-    applyMeasured(r, measure(s, coherent, random, opt.threads, gpu && gpuError.empty() ? &gpuView : nullptr, 3,
-                             &gpuError));
+    applyMeasured(r, measure(s, coherent, random, opt.threads, gpu && gpuError.empty() ? &gpuView : nullptr,
+                             3, &gpuError));
     std::printf("tetraprobe eval: sweep spacing %g m: %zu probes\n", spacing, swept->probes.size());
     for (const auto& m : r.methods)
       std::printf("  %-18s gross %.4f mean_rel %.4f bytes %llu ns coh %.1f gpu ms %.1f\n", m.name.c_str(),
@@ -534,7 +544,7 @@ int cmdEval(int argc, char** argv) {
                         m.grossError});
     };
     if (sweepRows.empty()) {
-      for (const MethodResult& m : reports[0].methods) add(m, "");
+      for (const MethodResult& m : reports[0].methods) add(m, m.name);
     } else {
       for (const SweepRow& row : sweepRows) {
         char label[32];
@@ -543,7 +553,8 @@ int cmdEval(int argc, char** argv) {
       }
     }
     std::string error;
-    if (!writeFileAtomic(args.str("--plot"), evalPlotSvg(points, po), &error)) throw std::runtime_error(error);
+    if (!writeFileAtomic(args.str("--plot"), evalPlotSvg(points, po), &error))
+      throw std::runtime_error(error);
   }
 
   if (args.has("--points-out")) {

@@ -11,13 +11,16 @@ namespace tetraprobe::cli {
 
 namespace {
 
-constexpr double kPanelW = 460, kPanelH = 320, kMarginL = 64, kMarginR = 16, kMarginT = 48,
-                 kMarginB = 56, kLegendH = 28;
+constexpr double kPanelW = 460, kPanelH = 320, kMarginL = 64, kMarginR = 16, kMarginT = 48, kMarginB = 56,
+                 kLegendH = 28;
 
 std::string colorOf(const std::string& method, size_t index) {
-  static const std::map<std::string, std::string> known = {
-      {"tet", "#1b9e77"},          {"tet (no occlusion)", "#7570b3"}, {"nearest", "#d95f02"},
-      {"grid (equal bytes)", "#e7298a"}, {"grid (probe count)", "#66a61e"}, {"tet+occlusion", "#e6ab02"}};
+  static const std::map<std::string, std::string> known = {{"tet", "#1b9e77"},
+                                                           {"tet (no occlusion)", "#7570b3"},
+                                                           {"nearest", "#d95f02"},
+                                                           {"grid (equal bytes)", "#e7298a"},
+                                                           {"grid (probe count)", "#66a61e"},
+                                                           {"tet+occlusion", "#e6ab02"}};
   static const char* spare[] = {"#a6761d", "#666666", "#1f78b4", "#b2df8a"};
   const auto it = known.find(method);
   return it != known.end() ? it->second : spare[index % 4];
@@ -67,7 +70,8 @@ std::vector<size_t> paretoFront(const std::vector<double>& x, const std::vector<
   std::vector<size_t> order;
   for (size_t i = 0; i < x.size(); ++i)
     if (x[i] > 0.0) order.push_back(i);
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return x[a] != x[b] ? x[a] < x[b] : y[a] < y[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return x[a] != x[b] ? x[a] < x[b] : y[a] < y[b]; });
   std::vector<size_t> front;
   double best = INFINITY;
   for (size_t i : order)
@@ -95,35 +99,40 @@ void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool b
       << "' fill='white' stroke='#444'/>\n";
   svg << "<text x='" << num(x0 + w / 2) << "' y='" << num(y0 + h + 40) << "' text-anchor='middle'>"
       << escape(xTitle) << "</text>\n";
-  svg << "<text x='" << num(ox + 16) << "' y='" << num(y0 + h / 2) << "' text-anchor='middle' transform='rotate(-90 "
-      << num(ox + 16) << " " << num(y0 + h / 2) << ")'>error</text>\n";
+  svg << "<text x='" << num(ox + 16) << "' y='" << num(y0 + h / 2)
+      << "' text-anchor='middle' transform='rotate(-90 " << num(ox + 16) << " " << num(y0 + h / 2)
+      << ")'>error</text>\n";
   if (!(xmax > 0.0)) {
     svg << "<text x='" << num(x0 + w / 2) << "' y='" << num(y0 + h / 2)
         << "' text-anchor='middle' fill='#888'>not measured</text>\n";
     return;
   }
-  // Log x over whole or half decades around the data; y from 0 to a round step above the maximum.
-  double lx0 = std::floor(std::log10(xmin) * 2.0) / 2.0, lx1 = std::ceil(std::log10(xmax) * 2.0) / 2.0;
+  // Log x padded by a fifth of a decade each side (at least one decade in all); ticks at 1, 2, 5 x 10^d.
+  double lx0 = std::log10(xmin) - 0.2, lx1 = std::log10(xmax) + 0.2;
   if (lx1 - lx0 < 1.0) {
-    lx0 -= 0.5;
-    lx1 += 0.5;
+    const double mid = 0.5 * (lx0 + lx1);
+    lx0 = mid - 0.5;
+    lx1 = mid + 0.5;
   }
   ymax = ymax > 0.0 ? ymax * 1.1 : 1.0;
   const double ystep = ymax > 1.0 ? 0.5 : ymax > 0.5 ? 0.1 : ymax > 0.2 ? 0.05 : 0.02;
   ymax = std::ceil(ymax / ystep) * ystep;
   auto X = [&](double v) { return x0 + (std::log10(v) - lx0) / (lx1 - lx0) * w; };
   auto Y = [&](double v) { return y0 + h - v / ymax * h; };
-  for (double d = std::ceil(lx0); d <= lx1 + 1e-9; d += 1.0) {
-    const double v = std::pow(10.0, d);
-    svg << "<line x1='" << num(X(v)) << "' y1='" << num(y0) << "' x2='" << num(X(v)) << "' y2='" << num(y0 + h)
-        << "' stroke='#ddd'/>\n<text x='" << num(X(v)) << "' y='" << num(y0 + h + 16)
-        << "' text-anchor='middle' font-size='11'>" << tickLabel(v, bytesAxis) << "</text>\n";
-  }
+  for (double d = std::floor(lx0); d <= lx1; d += 1.0)
+    for (const double m : {1.0, 2.0, 5.0}) {
+      const double v = m * std::pow(10.0, d);
+      if (std::log10(v) < lx0 || std::log10(v) > lx1) continue;
+      svg << "<line x1='" << num(X(v)) << "' y1='" << num(y0) << "' x2='" << num(X(v)) << "' y2='"
+          << num(y0 + h) << "' stroke='" << (m == 1.0 ? "#ccc" : "#eee") << "'/>\n<text x='" << num(X(v))
+          << "' y='" << num(y0 + h + 16) << "' text-anchor='middle' font-size='11'>"
+          << tickLabel(v, bytesAxis) << "</text>\n";
+    }
   for (double v = 0.0; v <= ymax + 1e-9; v += ystep) {
     char buf[16];
     std::snprintf(buf, sizeof buf, "%g", std::round(v * 1000.0) / 1000.0);
-    svg << "<line x1='" << num(x0) << "' y1='" << num(Y(v)) << "' x2='" << num(x0 + w) << "' y2='" << num(Y(v))
-        << "' stroke='#eee'/>\n<text x='" << num(x0 - 6) << "' y='" << num(Y(v) + 4)
+    svg << "<line x1='" << num(x0) << "' y1='" << num(Y(v)) << "' x2='" << num(x0 + w) << "' y2='"
+        << num(Y(v)) << "' stroke='#eee'/>\n<text x='" << num(x0 - 6) << "' y='" << num(Y(v) + 4)
         << "' text-anchor='end' font-size='11'>" << buf << "</text>\n";
   }
   // Series: per method, points joined in x order, circles for mean_rel, open squares for gross.
@@ -187,8 +196,8 @@ std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions&
       << "' viewBox='0 0 " << num(width) << " " << num(height)
       << "' font-family='Helvetica, Arial, sans-serif' font-size='12'>\n";
   svg << "<rect width='100%' height='100%' fill='white'/>\n";
-  svg << "<text x='" << num(width / 2) << "' y='20' text-anchor='middle' font-size='14'>" << escape(options.title)
-      << "</text>\n";
+  svg << "<text x='" << num(width / 2) << "' y='20' text-anchor='middle' font-size='14'>"
+      << escape(options.title) << "</text>\n";
   svg << "<text x='" << num(width / 2) << "' y='36' text-anchor='middle' font-size='11' fill='#555'>"
       << "filled circles: mean_rel_error; open squares: gross_error (fraction off by more than 2x)"
       << (options.pareto ? "; ringed, dashed black: Pareto front" : "") << "</text>\n";
@@ -197,8 +206,9 @@ std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions&
   for (size_t mi = 0; mi < methods.size(); ++mi) {
     const double lx = 24 + double(mi % 4) * (width - 48) / 4,
                  ly = kPanelH + 8 + kLegendH * double(mi / 4) + 12;
-    svg << "<circle cx='" << num(lx) << "' cy='" << num(ly - 4) << "' r='5' fill='" << colorOf(methods[mi], mi)
-        << "'/>\n<text x='" << num(lx + 10) << "' y='" << num(ly) << "'>" << escape(methods[mi]) << "</text>\n";
+    svg << "<circle cx='" << num(lx) << "' cy='" << num(ly - 4) << "' r='5' fill='"
+        << colorOf(methods[mi], mi) << "'/>\n<text x='" << num(lx + 10) << "' y='" << num(ly) << "'>"
+        << escape(methods[mi]) << "</text>\n";
   }
   svg << "</svg>\n";
   return svg.str();

@@ -8,10 +8,10 @@
 namespace tetraprobe::cli {
 
 struct PlotPoint {
-  std::string method;  // series: one colour per method, points of a series joined in x order
-  std::string label;   // text beside the point (e.g. "1 m"); may be empty
-  double bytes = 0.0;  // x of the left panel (log scale)
-  double time = 0.0;   // x of the right panel (log scale); <= 0: the point is left out there
+  std::string method;                 // series: one colour per method, points of a series joined in x order
+  std::string label;                  // text beside the point (e.g. "1 m"); may be empty
+  double bytes = 0.0;                 // x of the left panel (log scale)
+  double time = 0.0;                  // x of the right panel (log scale); <= 0: the point is left out there
   double meanRel = 0.0, gross = 0.0;  // y: mean_rel_error (filled circle), gross_error (open square)
 };
 

@@ -64,16 +64,16 @@ struct MethodResult {
   double meanRelError = 0.0;
   double p95RelError = 0.0;
   double leak = 0.0;
-  double leakIndirect = 0.0;      // leak over the points lit only indirectly (EvalPoint::indirectOnly)
-  double grossError = 0.0;        // fraction of points off by more than 2x either way (luminance)
-  double darkHoles = 0.0;         // fraction of points below 0.25x the reference (luminance)
-  double cpuNsPerQuery = 0.0;     // single thread, fastest of repeated timed passes over the points
+  double leakIndirect = 0.0;   // leak over the points lit only indirectly (EvalPoint::indirectOnly)
+  double grossError = 0.0;     // fraction of points off by more than 2x either way (luminance)
+  double darkHoles = 0.0;      // fraction of points below 0.25x the reference (luminance)
+  double cpuNsPerQuery = 0.0;  // single thread, fastest of repeated timed passes over the points
   // timeLookup (below), filled by the caller: wall time per query of a pass over all timing points on
   // `threads` threads, median over the passes; in a camera's pixel order and in random order. 0 = not timed.
   double cpuNsCoherent = 0.0, cpuNsRandom = 0.0;
   int threads = 0;
-  double gpuMs = -1.0;            // full-screen lookup pass, ms (the caller's; < 0 = not measured)
-  uint64_t bytes = 0;             // data the method's lookup touches at run time (sum of `sections`)
+  double gpuMs = -1.0;  // full-screen lookup pass, ms (the caller's; < 0 = not measured)
+  uint64_t bytes = 0;   // data the method's lookup touches at run time (sum of `sections`)
   std::vector<ByteSection> sections;
   uint64_t probes = 0;            // probes or grid nodes (for bytes per probe)
   std::vector<glm::vec3> values;  // per-point lookups (same order as EvalReport::points)

@@ -30,9 +30,9 @@ inline constexpr uint64_t kGridNodeBytes = sizeof(ShRgb);
 static_assert(kGridNodeBytes == 108, "a grid node is one ShRgb: 27 floats");
 
 struct GridLayout {
-  glm::dvec3 min{0.0};    // world metres: node (0, 0, 0)
-  double step = 1.0;      // node spacing, metres, the same on every axis (> 0)
-  glm::ivec3 dims{2};     // nodes per axis, each >= 2
+  glm::dvec3 min{0.0};  // world metres: node (0, 0, 0)
+  double step = 1.0;    // node spacing, metres, the same on every axis (> 0)
+  glm::ivec3 dims{2};   // nodes per axis, each >= 2
   size_t nodes() const { return size_t(dims.x) * size_t(dims.y) * size_t(dims.z); }
   uint64_t bytes() const { return kGridHeaderBytes + kGridNodeBytes * nodes(); }
   glm::dvec3 node(size_t index) const;  // world position of node `index` (x fastest)
@@ -55,7 +55,7 @@ class GridVolume {
   GridVolume(const GridLayout& layout, std::vector<ShRgb> sh, std::vector<uint8_t> invalid);
 
   const GridLayout& layout() const { return layout_; }
-  const std::vector<ShRgb>& sh() const { return sh_; }          // after dilation
+  const std::vector<ShRgb>& sh() const { return sh_; }              // after dilation
   const std::vector<uint8_t>& invalid() const { return invalid_; }  // as given (before dilation)
   size_t invalidNodes() const;
   uint64_t bytes() const { return layout_.bytes(); }

@@ -20,7 +20,8 @@ class NearestProbe {
   // The bucket grid's memory (bounds, cell size, dims, prefix sums and probe order), bytes; the probes'
   // positions and SH are the level's.
   uint64_t bytes() const {
-    return sizeof(min_) + sizeof(cell_) + sizeof(dims_) + (cellStart_.size() + order_.size()) * sizeof(uint32_t);
+    return sizeof(min_) + sizeof(cell_) + sizeof(dims_) +
+           (cellStart_.size() + order_.size()) * sizeof(uint32_t);
   }
 
  private:

@@ -87,12 +87,14 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
 struct RenderGrid {
   glm::dvec3 min{0.0};
   double step = 1.0;
-  glm::ivec3 dims{0};          // each >= 2
-  const ShRgb* sh = nullptr;   // must stay valid during the call
+  glm::ivec3 dims{0};         // each >= 2
+  const ShRgb* sh = nullptr;  // must stay valid during the call
 };
 
-// renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings; the local
-// frame is centred on the grid). Throws std::runtime_error as renderLevel, and for dims below 2 or no SH.
+// renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings). The local
+// frame's origin is glm::round(min + (dims - 1) x step / 2), the grid's centre in whole metres:
+// RenderResult::position is relative to it. Throws std::runtime_error as renderLevel, and for dims below 2,
+// a step that is not positive or no SH.
 RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, const RenderView& view);
 
 // Scale that maps the 95th percentile of luminance (Rec. 709 weights) over geometry pixels (a > 0) to 0.8.
