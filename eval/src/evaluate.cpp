@@ -6,11 +6,15 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <utility>
+
+#include <glm/common.hpp>
 
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/eval/nearest_probe.h"
+#include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
 
@@ -87,6 +91,8 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
   MethodResult m;
   m.name = method.name;
   m.bytes = method.bytes;
+  m.sections = method.sections;
+  m.probes = method.probes;
   const size_t n = report.points.size();
   m.values.resize(n);
   for (size_t i = 0; i < n; ++i)
@@ -144,29 +150,182 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
   report.methods.push_back(std::move(m));
 }
 
+uint64_t totalBytes(const std::vector<ByteSection>& sections) {
+  uint64_t sum = 0;
+  for (const ByteSection& s : sections) sum += s.bytes;
+  return sum;
+}
+
+std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion) {
+  const Level& level = query.level();
+  std::vector<ByteSection> out = {
+      {"positions", level.probes.size() * sizeof(glm::vec3)},
+      {"sh", level.sh.size() * sizeof(ShRgb)},
+      {"tets", level.tets.size() * sizeof(Tet)},
+      {"cell_grid", cellGridBytes(query.cellGrid())},
+      {"outer_cells", query.outerCells().size() * sizeof(OuterCell)},
+      {"start_grid", query.startGrid().startTet.size() * sizeof(int32_t)},
+  };
+  if (occlusion) out.push_back({"occlusion", level.occlusion.bytes()});
+  return out;
+}
+
 std::vector<LookupMethod> standardMethods(const Level& level) {
   std::vector<LookupMethod> methods;
-  const uint64_t probeBytes = level.probes.size() * (sizeof(glm::vec3) + sizeof(ShRgb));
   const glm::dvec3 origin = level.origin;
+  const uint64_t probes = level.probes.size();
 
   // ProbeQuery applies the level's stored occlusion, if any; then `tet (no occlusion)` shows what it removes.
   auto query = std::make_shared<ProbeQuery>(level);
-  methods.push_back({"tet", probeBytes + level.tets.size() * sizeof(Tet) + level.occlusion.bytes(),
-                     [query](const glm::dvec3& p, const glm::vec3& n) { return query->irradiance(p, n); }});
+  {
+    LookupMethod tet;
+    tet.name = "tet";
+    tet.sections = tetLookupBytes(*query, !level.occlusion.empty());
+    tet.bytes = totalBytes(tet.sections);
+    tet.probes = probes;
+    tet.lookup = [query](const glm::dvec3& p, const glm::vec3& n) { return query->irradiance(p, n); };
+    tet.batch = [query](const glm::dvec3* p, const glm::vec3* n, glm::vec3* out, size_t count) {
+      query->irradianceBatch(p, n, out, count, 1);
+    };
+    methods.push_back(std::move(tet));
+  }
   if (!level.occlusion.empty()) {
     auto plain = std::make_shared<ProbeQuery>(level);
     plain->setUseOcclusion(false);
-    methods.push_back({"tet (no occlusion)", probeBytes + level.tets.size() * sizeof(Tet),
-                       [plain](const glm::dvec3& p, const glm::vec3& n) { return plain->irradiance(p, n); }});
+    LookupMethod tet;
+    tet.name = "tet (no occlusion)";
+    tet.sections = tetLookupBytes(*plain, false);
+    tet.bytes = totalBytes(tet.sections);
+    tet.probes = probes;
+    tet.lookup = [plain](const glm::dvec3& p, const glm::vec3& n) { return plain->irradiance(p, n); };
+    tet.batch = [plain](const glm::dvec3* p, const glm::vec3* n, glm::vec3* out, size_t count) {
+      plain->irradianceBatch(p, n, out, count, 1);
+    };
+    methods.push_back(std::move(tet));
   }
 
   auto nearest = std::make_shared<NearestProbe>(level);
   const Level* lv = &level;
-  methods.push_back({"nearest", probeBytes, [nearest, lv, origin](const glm::dvec3& p, const glm::vec3& n) {
-                       const int32_t i = nearest->nearest(glm::vec3(p - origin));
-                       return i < 0 ? glm::vec3(0.0f) : shIrradiance(lv->sh[size_t(i)], n);
-                     }});
+  LookupMethod near;
+  near.name = "nearest";
+  near.sections = {{"positions", probes * sizeof(glm::vec3)},
+                   {"sh", probes * sizeof(ShRgb)},
+                   {"buckets", nearest->bytes()}};
+  near.bytes = totalBytes(near.sections);
+  near.probes = probes;
+  near.lookup = [nearest, lv, origin](const glm::dvec3& p, const glm::vec3& n) {
+    const int32_t i = nearest->nearest(glm::vec3(p - origin));
+    return i < 0 ? glm::vec3(0.0f) : shIrradiance(lv->sh[size_t(i)], n);
+  };
+  methods.push_back(std::move(near));
   return methods;
+}
+
+LookupMethod gridMethod(std::shared_ptr<const GridVolume> grid, const std::string& name) {
+  LookupMethod m;
+  m.name = name;
+  m.sections = {{"header", kGridHeaderBytes}, {"sh", grid->layout().nodes() * kGridNodeBytes}};
+  m.bytes = grid->bytes();
+  m.probes = grid->layout().nodes();
+  m.lookup = [grid](const glm::dvec3& p, const glm::vec3& n) { return grid->irradiance(p, n); };
+  return m;
+}
+
+TimingPoints cameraTimingPoints(const SceneTracer& tracer, const Camera& camera, int width, int height,
+                                int threads) {
+  RenderView view;
+  view.eye = camera.eye;
+  view.target = camera.target;
+  view.up = camera.up;
+  view.fovYDeg = camera.fovYDeg;
+  view.width = width;
+  view.height = height;
+  const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view, threads);
+  TimingPoints out;
+  for (size_t i = 0; i < g.hit.size(); ++i)
+    if (g.hit[i]) {
+      out.position.push_back(g.position[i]);
+      out.normal.push_back(g.normal[i]);
+    }
+  out.order = "pixels of camera " + (camera.name.empty() ? std::string("0") : camera.name) + " " +
+              std::to_string(width) + "x" + std::to_string(height);
+  return out;
+}
+
+TimingPoints mortonTimingPoints(const EvalReport& report) {
+  TimingPoints out;
+  const size_t n = report.points.size();
+  if (n == 0) return out;
+  glm::dvec3 lo = report.points[0].surface.position, hi = lo;
+  for (const EvalPoint& p : report.points) {
+    lo = glm::min(lo, p.surface.position);
+    hi = glm::max(hi, p.surface.position);
+  }
+  const glm::dvec3 ext = glm::max(hi - lo, glm::dvec3(1e-9));
+  auto spread = [](uint64_t v) {  // 21 bits -> every third bit
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+  };
+  std::vector<std::pair<uint64_t, size_t>> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec3 u = (report.points[i].surface.position - lo) / ext * double((1 << 21) - 1);
+    keys[i] = {spread(uint64_t(u.x)) | spread(uint64_t(u.y)) << 1 | spread(uint64_t(u.z)) << 2, i};
+  }
+  std::sort(keys.begin(), keys.end());
+  for (const auto& [key, i] : keys) {
+    out.position.push_back(report.points[i].surface.position);
+    out.normal.push_back(report.points[i].surface.normal);
+  }
+  out.order = "morton order of the points";
+  return out;
+}
+
+TimingPoints shuffledTimingPoints(const TimingPoints& points, uint64_t seed) {
+  TimingPoints out = points;
+  uint64_t state = seed;
+  for (size_t i = out.position.size(); i > 1; --i) {
+    state = mix(state);
+    const size_t j = size_t(state % i);
+    std::swap(out.position[i - 1], out.position[j]);
+    std::swap(out.normal[i - 1], out.normal[j]);
+  }
+  out.order = "random";
+  return out;
+}
+
+double timeLookup(const LookupMethod& method, const TimingPoints& points, int threads, int runs) {
+  const size_t n = points.position.size();
+  if (n == 0) return 0.0;
+  const int t = std::max(1, std::min<int>(resolveThreads(threads), int(n)));
+  std::vector<glm::vec3> out(n);
+  auto pass = [&] {
+    parallelFor(
+        size_t(t), t,
+        [&](size_t k) {
+          const size_t begin = n * k / size_t(t), end = n * (k + 1) / size_t(t);
+          if (method.batch) {
+            method.batch(&points.position[begin], &points.normal[begin], &out[begin], end - begin);
+          } else {
+            for (size_t i = begin; i < end; ++i) out[i] = method.lookup(points.position[i], points.normal[i]);
+          }
+        },
+        1);
+  };
+  pass();  // warm-up: caches, page faults, lazily built data
+  std::vector<double> ns;
+  for (int r = 0; r < std::max(1, runs); ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    pass();
+    ns.push_back(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() /
+                 double(n));
+  }
+  std::sort(ns.begin(), ns.end());
+  return ns[ns.size() / 2];
 }
 
 }  // namespace tetraprobe
@@ -185,10 +344,11 @@ std::vector<float> fallbackShares(const Level& level, const EvalReport& report) 
 
 LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion) {
   auto query = std::make_shared<ProbeQuery>(level);
-  const uint64_t bytes = level.probes.size() * (sizeof(glm::vec3) + sizeof(ShRgb)) +
-                         level.tets.size() * sizeof(Tet) + occlusion->bytes();
+  std::vector<ByteSection> sections = tetLookupBytes(*query, false);
+  sections.push_back({"occlusion", occlusion->bytes()});
   const Level* lv = &level;
-  return {"tet+occlusion", bytes, [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
+  return {"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
+          [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
             const Location loc = query->locate(p);
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
             const Tet& t = lv->tets[size_t(loc.tet)];

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
@@ -18,6 +19,7 @@
 #include "gbuffer.frag.h"
 #include "gbuffer.vert.h"
 #include "lighting.comp.h"
+#include "lighting_grid.comp.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
 #include "vulkan_context.h"
 
@@ -271,10 +273,18 @@ glm::mat4 viewProjection(const RenderView& view, const glm::dvec3& origin, const
   return glm::mat4(p * v);
 }
 
-}  // namespace
+// The grid's storage buffer header (shaders/lighting_grid.comp), 48 bytes.
+struct GridHeader {
+  float min[4];
+  float step[4];
+  int32_t dims[4];
+};
+static_assert(sizeof(GridHeader) == 48, "lighting_grid.comp header: vec4 min, vec4 step, ivec4 dims");
 
-RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
-                         const RenderView& view) {
+// The lighting pass reads either a level (tetraprobe.glsl, set 0 = the level's buffers) or a grid
+// (lighting_grid.comp, set 0 binding 0 = one buffer).
+RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const Level* level,
+                        const ProbeQuery* query, const RenderGrid* grid, const RenderView& view) {
   const auto t0 = std::chrono::steady_clock::now();
   if (view.width <= 0 || view.height <= 0 || view.width > 16384 || view.height > 16384)
     throw std::runtime_error("render: image size " + std::to_string(view.width) + "x" +
@@ -286,23 +296,42 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   const uint32_t width = uint32_t(view.width), height = uint32_t(view.height);
 
   glm::dvec3 lo, hi;
-  const std::vector<Vertex> soup = buildSoup(mesh, level.origin, &lo, &hi);
-  const glm::mat4 viewProj = viewProjection(view, level.origin, lo, hi);
+  const std::vector<Vertex> soup = buildSoup(mesh, origin, &lo, &hi);
+  const glm::mat4 viewProj = viewProjection(view, origin, lo, hi);
 
   VulkanContext ctx;
   const VkDevice device = ctx.device();
   CleanupStack cleanup;  // declared after ctx: runs first, while the device still exists
 
-  // Level buffers, exactly as an engine would upload them.
-  VulkanLevelBuffers levelBuffers;
-  std::string uploadError;
-  if (uploadLevelBuffers(ctx.physicalDevice(), device, level, query.startGrid(), query.outerCells(),
-                         query.cellGrid(), levelBuffers, &uploadError) != VK_SUCCESS)
-    throw std::runtime_error("render: level upload failed: " + uploadError);
-  cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
-
   const VkMemoryPropertyFlags hostMem =
       VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  // Level buffers, exactly as an engine would upload them; or the grid's one buffer.
+  VulkanLevelBuffers levelBuffers;
+  GpuBuffer gridBuffer;
+  if (level) {
+    std::string uploadError;
+    if (uploadLevelBuffers(ctx.physicalDevice(), device, *level, query->startGrid(), query->outerCells(),
+                           query->cellGrid(), levelBuffers, &uploadError) != VK_SUCCESS)
+      throw std::runtime_error("render: level upload failed: " + uploadError);
+    cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
+  } else {
+    const size_t nodes = size_t(grid->dims.x) * size_t(grid->dims.y) * size_t(grid->dims.z);
+    const VkDeviceSize bytes = sizeof(GridHeader) + nodes * sizeof(ShRgb);
+    gridBuffer = ctx.createBuffer(bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
+    GridHeader header{};
+    const glm::vec3 localMin(grid->min - origin);
+    for (int a = 0; a < 3; ++a) {
+      header.min[a] = localMin[a];
+      header.step[a] = float(grid->step);
+      header.dims[a] = grid->dims[a];
+    }
+    void* mapped;
+    vkCheck(vkMapMemory(device, gridBuffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (grid)");
+    std::memcpy(mapped, &header, sizeof header);
+    std::memcpy(static_cast<char*>(mapped) + sizeof header, grid->sh, nodes * sizeof(ShRgb));
+    vkUnmapMemory(device, gridBuffer.memory);
+  }
+
   const VkDeviceSize vertexBytes = std::max<VkDeviceSize>(sizeof(Vertex), soup.size() * sizeof(Vertex));
   const GpuBuffer vertices =
       ctx.createBuffer(vertexBytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, hostMem, cleanup);
@@ -353,18 +382,20 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   // Lighting pass: set 0 = the level (vulkan_upload.h), set 1 = the G-buffer and output images.
   VkDescriptorSetLayoutBinding levelBindings[kGpuBindingCount];
   levelDescriptorBindings(VK_SHADER_STAGE_COMPUTE_BIT, 0, levelBindings);
+  const uint32_t levelBindingCount = level ? uint32_t(kGpuBindingCount) : 1u;  // the grid: binding 0 only
   VkDescriptorSetLayoutBinding imageBindings[4];
   for (uint32_t i = 0; i < 4; ++i)
     imageBindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   const VkDescriptorSetLayout setLayouts[2] = {
-      createSetLayout(device, levelBindings, kGpuBindingCount, cleanup),
+      createSetLayout(device, levelBindings, levelBindingCount, cleanup),
       createSetLayout(device, imageBindings, 4, cleanup)};
   const VkPipelineLayout lightingLayout =
       createPipelineLayout(device, setLayouts, 2, VK_SHADER_STAGE_COMPUTE_BIT, sizeof(LightingPush), cleanup);
   VkPipeline lightingPipeline;
   {
     const VkShaderModule comp =
-        createShader(device, kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp), cleanup);
+        level ? createShader(device, kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp), cleanup)
+              : createShader(device, kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp), cleanup);
     VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -377,7 +408,7 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   }
   VkDescriptorPool descriptorPool;
   {
-    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kGpuBindingCount},
+    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount},
                                            {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 4}};
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     info.maxSets = 2;
@@ -394,7 +425,18 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
     info.pSetLayouts = setLayouts;
     vkCheck(vkAllocateDescriptorSets(device, &info, sets), "vkAllocateDescriptorSets");
   }
-  writeLevelDescriptors(device, sets[0], 0, levelBuffers);
+  if (level) {
+    writeLevelDescriptors(device, sets[0], 0, levelBuffers);
+  } else {
+    const VkDescriptorBufferInfo info{gridBuffer.buffer, 0, VK_WHOLE_SIZE};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = sets[0];
+    write.dstBinding = 0;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    write.pBufferInfo = &info;
+    vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+  }
   {
     // Bindings 0..2 = position, normal, albedo; 3 = output color.
     const int order[4] = {1, 2, 3, 0};
@@ -539,6 +581,20 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
   result.timings.totalMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
+}
+
+}  // namespace
+
+RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
+                         const RenderView& view) {
+  return renderImpl(mesh, level.origin, &level, &query, nullptr, view);
+}
+
+RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, const RenderView& view) {
+  if (grid.dims.x < 2 || grid.dims.y < 2 || grid.dims.z < 2 || !grid.sh || !(grid.step > 0.0))
+    throw std::runtime_error("render: a grid needs at least 2 nodes per axis, a positive step and its SH");
+  const glm::dvec3 centre = grid.min + glm::dvec3(grid.dims - 1) * grid.step * 0.5;
+  return renderImpl(mesh, glm::round(centre), nullptr, nullptr, &grid, view);
 }
 
 }  // namespace tetraprobe

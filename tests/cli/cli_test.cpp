@@ -488,3 +488,29 @@ TEST_F(Cli, RenderReferenceAndErrorModesWriteImagesAndFigures) {
     EXPECT_EQ(lineCount(r.err), 1) << bad << "\n" << r.err;
   }
 }
+
+// eval scores every method on the same points, the grid included, and writes the Markdown table, the SVG plot
+// and the JSON keys the docs name (the box bakes in well under a second; the grid at the probe count is
+// small, and --samples 16 keeps the bake and the reference cheap).
+TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
+                          " --samples 16 --noise 0 --threads 2");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  const CliRun r =
+      run("eval " + path("box.obj").string() + " " + path("l.tpb").string() +
+          " --points 32 --samples 16 --grid both --gpu none --timing-size 32x18 --markdown --plot " +
+          path("p.svg").string() + " --report " + path("e.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* name : {"| tet |", "| nearest |", "| grid (equal bytes) |", "| grid (probe count) |"})
+    EXPECT_NE(r.out.find(name), std::string::npos) << "no row " << name << " in\n" << r.out;
+  const std::string svg = slurp(path("p.svg"));
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("grid (equal bytes)"), std::string::npos);
+  const std::string json = slurp(path("e.json"));
+  for (const char* key :
+       {"\"cpu_ns_per_query\"", "\"cpu_ns_per_query_coherent\"", "\"cpu_ns_per_query_random\"", "\"threads\"",
+        "\"gpu_ms\"", "\"bytes_sections\"", "\"cell_grid\"", "\"outer_cells\"", "\"bytes_per_probe\""})
+    EXPECT_NE(json.find(key), std::string::npos) << "no key " << key;
+}

@@ -7,6 +7,7 @@
 #include "args.h"
 #include "commands.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/runtime/level.h"
 
 namespace tetraprobe::cli {
@@ -39,6 +40,15 @@ int cmdInspect(int argc, char** argv) {
   const uint64_t bytes = std::filesystem::file_size(path);
   const CellGrid& grid = level.cellGrid;
   const size_t cells = occupiedCells(grid), gridBytes = cellGridBytes(grid);
+  // What the lookup touches, by section (the query builds the outer cells, cell grid and start grid the
+  // level does not store, as an engine's load does).
+  const ProbeQuery query(level);
+  const std::vector<ByteSection> sections = tetLookupBytes(query, true);
+  const uint64_t lookupBytes = totalBytes(sections);
+  const double probes = level.probes.empty() ? 1.0 : double(level.probes.size());
+  nlohmann::json lookup = {{"total", lookupBytes}, {"per_probe", double(lookupBytes) / probes}};
+  for (const ByteSection& s : sections)
+    lookup["sections"][s.name] = {{"bytes", s.bytes}, {"per_probe", double(s.bytes) / probes}};
 
   if (args.has("--json")) {
     nlohmann::json j = {{"path", path},
@@ -60,7 +70,8 @@ int cmdInspect(int argc, char** argv) {
                           {"max_depth", grid.maxDepth},
                           {"mean_depth", grid.meanDepth},
                           {"bytes", gridBytes}}},
-                        {"occlusion_bytes", level.occlusion.bytes()}};
+                        {"occlusion_bytes", level.occlusion.bytes()},
+                        {"lookup_bytes", lookup}};
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
@@ -83,6 +94,10 @@ int cmdInspect(int argc, char** argv) {
         cells, double(grid.cellSize), grid.nodes.size(), grid.leaves, grid.maxDepth, grid.meanDepth,
         gridBytes);
   std::printf("  occlusion  %zu bytes\n", level.occlusion.bytes());
+  std::printf("  lookup     %llu bytes in memory, %.0f per probe:", (unsigned long long)lookupBytes,
+              double(lookupBytes) / probes);
+  for (const ByteSection& s : sections) std::printf(" %s %.0f", s.name.c_str(), double(s.bytes) / probes);
+  std::printf("\n");
   return 0;
 }
 

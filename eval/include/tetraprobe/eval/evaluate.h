@@ -24,8 +24,11 @@
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/eval/grid_volume.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/occlusion.h"
+#include "tetraprobe/runtime/query.h"
+#include "tetraprobe/scene/scene.h"
 
 namespace tetraprobe {
 
@@ -49,17 +52,30 @@ struct EvalOptions {
   bool progress = true;
 };
 
+// One part of a method's run-time data, bytes.
+struct ByteSection {
+  std::string name;
+  uint64_t bytes = 0;
+};
+
 struct MethodResult {
   std::string name;
   double relmse = 0.0;
   double meanRelError = 0.0;
   double p95RelError = 0.0;
   double leak = 0.0;
-  double leakIndirect = 0.0;      // leak over the points lit only indirectly (EvalPoint::indirectOnly)
-  double grossError = 0.0;        // fraction of points off by more than 2x either way (luminance)
-  double darkHoles = 0.0;         // fraction of points below 0.25x the reference (luminance)
-  double cpuNsPerQuery = 0.0;     // single thread, median of repeated timed passes over all points
-  uint64_t bytes = 0;             // data the method needs at run time
+  double leakIndirect = 0.0;   // leak over the points lit only indirectly (EvalPoint::indirectOnly)
+  double grossError = 0.0;     // fraction of points off by more than 2x either way (luminance)
+  double darkHoles = 0.0;      // fraction of points below 0.25x the reference (luminance)
+  double cpuNsPerQuery = 0.0;  // single thread, fastest of repeated timed passes over the points
+  // timeLookup (below), filled by the caller: wall time per query of a pass over all timing points on
+  // `threads` threads, median over the passes; in a camera's pixel order and in random order. 0 = not timed.
+  double cpuNsCoherent = 0.0, cpuNsRandom = 0.0;
+  int threads = 0;
+  double gpuMs = -1.0;  // full-screen lookup pass, ms (the caller's; < 0 = not measured)
+  uint64_t bytes = 0;   // data the method's lookup touches at run time (sum of `sections`)
+  std::vector<ByteSection> sections;
+  uint64_t probes = 0;            // probes or grid nodes (for bytes per probe)
   std::vector<glm::vec3> values;  // per-point lookups (same order as EvalReport::points)
 };
 
@@ -84,9 +100,46 @@ struct EvalReport {
 // A lookup method under test: irradiance at (world position, unit normal).
 struct LookupMethod {
   std::string name;
-  uint64_t bytes = 0;
+  uint64_t bytes = 0;                 // sum of `sections` when they are given
+  std::vector<ByteSection> sections;  // optional breakdown of `bytes`
+  uint64_t probes = 0;                // probes or grid nodes
   std::function<glm::vec3(const glm::dvec3&, const glm::vec3&)> lookup;
+  // Optional: out[i] = lookup(world[i], normal[i]) for i < count, on the calling thread, the way an engine
+  // would call the method for consecutive pixels (the tet lookup passes each query's tet to the next).
+  // Timing uses it when set.
+  std::function<void(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t count)> batch;
 };
+
+// What the tet lookup (ProbeQuery::irradiance and shaders/tetraprobe.glsl) reads, section by section, in the
+// runtime's in-memory and GPU layout: probe positions (12 bytes each), SH (108), tets (80), the cell grid's
+// hash slots and BSP nodes (cellGridBytes), outer cells (80), the coarse start grid (4 bytes a cell) and,
+// when `occlusion`, the level's occlusion data. The query's structures are counted (those the level stores,
+// or those it built on load).
+std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion);
+uint64_t totalBytes(const std::vector<ByteSection>& sections);
+
+// Points to time lookups at: positions and unit normals in the order they are queried.
+struct TimingPoints {
+  std::vector<glm::dvec3> position;  // world metres
+  std::vector<glm::vec3> normal;
+  std::string order;  // how they are ordered, for the report ("pixels of camera NAME WxH", "random")
+};
+
+// The hit pixels of `camera`'s view at width x height (traceReferenceGBuffer: the renderer's camera), in
+// pixel order (row by row): the order a full-screen pass queries. Normals face the camera.
+TimingPoints cameraTimingPoints(const SceneTracer& tracer, const Camera& camera, int width, int height,
+                                int threads = 0);
+// The report's points along a Morton (Z-order) curve over their bounds: a coherent order for scenes
+// without cameras.
+TimingPoints mortonTimingPoints(const EvalReport& report);
+// The same points in a random order (Fisher-Yates with `seed`).
+TimingPoints shuffledTimingPoints(const TimingPoints& points, uint64_t seed);
+
+// Wall time per query, ns: `runs` passes over all `points` (each of `threads` threads takes a contiguous
+// share, through method.batch when set), the median pass divided by the number of points (so with T
+// threads it is the throughput cost, about 1/T of one thread's latency). One untimed warm-up pass first.
+// 0 for no points.
+double timeLookup(const LookupMethod& method, const TimingPoints& points, int threads, int runs = 7);
 
 // "area" or "cameras".
 const char* evalSamplingName(EvalSampling sampling);
@@ -96,13 +149,19 @@ const char* evalSamplingName(EvalSampling sampling);
 // kCameras without cameras.
 EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options);
 
-// Scores one method against the report's references and appends it to report.methods.
+// Scores one method against the report's references and appends it to report.methods (name, bytes,
+// sections, probes, the error measures of the header and cpuNsPerQuery; the other timings stay 0).
 void scoreMethod(EvalReport& report, const LookupMethod& method);
 
 // The standard methods for a level: `tet` (ProbeQuery, with the level's stored occlusion when it has some),
 // `tet (no occlusion)` (only for a level storing occlusion: ProbeQuery with it disabled) and `nearest`
-// (nearest probe's SH).
+// (nearest probe's SH). Bytes: tetLookupBytes for the tet methods; positions, SH and the bucket grid for
+// `nearest`.
 std::vector<LookupMethod> standardMethods(const Level& level);
+
+// `name` (e.g. "grid (equal bytes)"): the grid's trilinear lookup (grid_volume.h); bytes = grid->bytes()
+// (header + nodes), probes = its nodes.
+LookupMethod gridMethod(std::shared_ptr<const GridVolume> grid, const std::string& name);
 
 // Per point of `report`, the share of the all-occluded fallback in the `tet` answer (applyOcclusion's
 // `fallback`, occlusion.h): 0 where the point sees some of its tet's probes, 1 where it sees none. All zero for

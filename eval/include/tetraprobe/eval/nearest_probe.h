@@ -17,6 +17,12 @@ class NearestProbe {
   explicit NearestProbe(const Level& level);
   // Index of the probe nearest to a local-frame point (ties: lowest index); -1 for a level with no probes.
   int32_t nearest(const glm::vec3& local) const;
+  // The bucket grid's memory (bounds, cell size, dims, prefix sums and probe order), bytes; the probes'
+  // positions and SH are the level's.
+  uint64_t bytes() const {
+    return sizeof(min_) + sizeof(cell_) + sizeof(dims_) +
+           (cellStart_.size() + order_.size()) * sizeof(uint32_t);
+  }
 
  private:
   const Level& level_;

@@ -79,6 +79,24 @@ struct RenderResult {
 RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
                          const RenderView& view);
 
+// A regular SH L2 grid for the lighting pass to read instead of a level (shaders/lighting_grid.comp): the
+// `grid` method of `tetraprobe eval` (eval/grid_volume.h), rendered to time it against the tet lookup.
+// Node (i, j, k) at min + (i, j, k) x step, world metres; `sh` holds dims.x * dims.y * dims.z nodes, x fastest,
+// in runtime/sh.h's convention; uploaded as a 48-byte header (vec4 min, vec4 step, ivec4 dims; local frame)
+// and 27 floats per node.
+struct RenderGrid {
+  glm::dvec3 min{0.0};
+  double step = 1.0;
+  glm::ivec3 dims{0};         // each >= 2
+  const ShRgb* sh = nullptr;  // must stay valid during the call
+};
+
+// renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings). The local
+// frame's origin is glm::round(min + (dims - 1) x step / 2), the grid's centre in whole metres:
+// RenderResult::position is relative to it. Throws std::runtime_error as renderLevel, and for dims below 2,
+// a step that is not positive or no SH.
+RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, const RenderView& view);
+
 // Scale that maps the 95th percentile of luminance (Rec. 709 weights) over geometry pixels (a > 0) to 0.8.
 // Returns 1 when there is no geometry or the percentile is not positive.
 float autoExposure(const Image& image);

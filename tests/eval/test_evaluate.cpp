@@ -1,0 +1,225 @@
+// The evaluation's scoring (eval/evaluate.h): scoreMethod's measures have known answers on hand-built
+// reports, the reference equals closed forms within its standard error, and `tet`'s bytes count every
+// section the lookup reads.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "test_levels.h"
+#include "tetraprobe/eval/evaluate.h"
+#include "tetraprobe/runtime/query.h"
+
+namespace tetraprobe {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Four points with references well above the 0.01 W/m^2 floor, one of them lit only indirectly.
+EvalReport handBuiltReport() {
+  EvalReport report;
+  const glm::vec3 refs[4] = {
+      {1.0f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, {4.0f, 1.0f, 0.25f}, {10.0f, 8.0f, 6.0f}};
+  for (int i = 0; i < 4; ++i) {
+    EvalPoint p;
+    p.surface.position = glm::dvec3(i, 0.0, 0.0);
+    p.surface.normal = glm::vec3(0, 1, 0);
+    p.reference.irradiance = refs[i];
+    p.indirectOnly = i == 1;
+    report.points.push_back(p);
+  }
+  return report;
+}
+
+// A method answering f(reference) at every point (looked up by the point's x coordinate).
+LookupMethod methodOf(const EvalReport& report, glm::vec3 (*f)(glm::vec3)) {
+  std::vector<glm::vec3> refs;
+  for (const EvalPoint& p : report.points) refs.push_back(p.reference.irradiance);
+  return {"m", 0, {}, 0, [refs, f](const glm::dvec3& p, const glm::vec3&) { return f(refs[size_t(p.x)]); }};
+}
+
+const MethodResult& scored(EvalReport& report, glm::vec3 (*f)(glm::vec3)) {
+  scoreMethod(report, methodOf(report, f));
+  return report.methods.back();
+}
+
+// The reference itself scores zero on every measure: nothing in the definitions is biased.
+TEST(ScoreMethod, ExactAnswerScoresZeroEverywhere) {
+  EvalReport report = handBuiltReport();
+  const MethodResult& m = scored(report, [](glm::vec3 r) { return r; });
+  EXPECT_EQ(m.relmse, 0.0);
+  EXPECT_EQ(m.meanRelError, 0.0);
+  EXPECT_EQ(m.p95RelError, 0.0);
+  EXPECT_EQ(m.leak, 0.0);
+  EXPECT_EQ(m.leakIndirect, 0.0);
+  EXPECT_EQ(m.grossError, 0.0);
+  EXPECT_EQ(m.darkHoles, 0.0);
+  ASSERT_EQ(m.values.size(), report.points.size());
+}
+
+// gross_error is "off by more than 2x": just above twice the reference counts at every point, just below
+// does not; the leak of 2x + eps is 1 + eps.
+TEST(ScoreMethod, TwiceTheReferencePlusEpsilonIsGrossEverywhere) {
+  EvalReport report = handBuiltReport();
+  const MethodResult& above = scored(report, [](glm::vec3 r) { return r * 2.001f; });
+  EXPECT_EQ(above.grossError, 1.0);
+  EXPECT_EQ(above.darkHoles, 0.0);
+  EXPECT_NEAR(above.leak, 1.001, 1e-5);
+  EXPECT_NEAR(above.leakIndirect, 1.001, 1e-5);
+  const MethodResult& below = scored(report, [](glm::vec3 r) { return r * 1.999f; });
+  EXPECT_EQ(below.grossError, 0.0);
+  const MethodResult& half = scored(report, [](glm::vec3 r) { return r * 0.499f; });
+  EXPECT_EQ(half.grossError, 1.0);
+  EXPECT_EQ(half.darkHoles, 0.0);
+  EXPECT_EQ(half.leak, 0.0) << "too dark is not a leak";
+}
+
+// dark_holes is "below a quarter of the reference": 0.24x is a hole, 0.26x is not (but is gross).
+TEST(ScoreMethod, DarkHoleThresholdIsAQuarter) {
+  EvalReport report = handBuiltReport();
+  EXPECT_EQ(scored(report, [](glm::vec3 r) { return r * 0.24f; }).darkHoles, 1.0);
+  const MethodResult& m = scored(report, [](glm::vec3 r) { return r * 0.26f; });
+  EXPECT_EQ(m.darkHoles, 0.0);
+  EXPECT_EQ(m.grossError, 1.0);
+}
+
+// Points black in both (below the 0.01 W/m^2 floor) agree: neither gross nor dark, whatever the ratio.
+TEST(ScoreMethod, NearBlackPointsAgreeBelowTheFloor) {
+  EvalReport report = handBuiltReport();
+  for (EvalPoint& p : report.points) p.reference.irradiance = glm::vec3(0.001f);
+  const MethodResult& m = scored(report, [](glm::vec3) { return glm::vec3(0.008f); });
+  EXPECT_EQ(m.grossError, 0.0);
+  const MethodResult& d = scored(report, [](glm::vec3) { return glm::vec3(0.0f); });
+  EXPECT_EQ(d.darkHoles, 0.0);
+}
+
+// A constant offset d gives relmse = mean over p, c of d^2 / (r^2 + 0.01) and mean_rel_error = mean over p of
+// mean over c of d / sqrt(r^2 + 0.01): the closed forms of docs/evaluation.md.
+TEST(ScoreMethod, RelmseAndMeanRelMatchClosedForm) {
+  EvalReport report = handBuiltReport();
+  const MethodResult& m = scored(report, [](glm::vec3 r) { return r + glm::vec3(0.5f); });
+  double relmse = 0.0, meanRel = 0.0;
+  std::vector<double> perPoint;
+  for (const EvalPoint& p : report.points) {
+    double e = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double r = p.reference.irradiance[c];
+      relmse += 0.25 / (r * r + 0.01);
+      e += 0.5 / std::sqrt(r * r + 0.01);
+    }
+    perPoint.push_back(e / 3.0);
+    meanRel += e / 3.0;
+  }
+  EXPECT_NEAR(m.relmse, relmse / 12.0, 1e-6);
+  EXPECT_NEAR(m.meanRelError, meanRel / 4.0, 1e-6);
+  // p95 of 4 values is the largest (ceil(0.95 * 4) = 4th).
+  EXPECT_NEAR(m.p95RelError, *std::max_element(perPoint.begin(), perPoint.end()), 1e-6);
+}
+
+// leak_indirect averages over the points lit only indirectly, and only those.
+TEST(ScoreMethod, LeakIndirectCountsOnlyIndirectPoints) {
+  EvalReport report = handBuiltReport();
+  scoreMethod(report, {"m", 0, {}, 0, [&](const glm::dvec3& p, const glm::vec3&) {
+                         const glm::vec3 r = report.points[size_t(p.x)].reference.irradiance;
+                         return p.x == 1.0 ? r * 3.0f : r;  // point 1 is the indirect one
+                       }});
+  EXPECT_NEAR(report.methods.back().leakIndirect, 2.0, 1e-6);
+  EXPECT_NEAR(report.methods.back().leak, 0.5, 1e-6);
+}
+
+// Under a constant sky of radiance L an upward floor receives E = pi L and nothing else (it cannot light
+// itself): every reference point equals it, within 4 of its standard errors (here 0: each cosine-sampled
+// path sees the sky, so E is exact up to rounding).
+TEST(ComputeReference, FloorUnderConstantSkyIsPiL) {
+  const glm::vec3 L(1.0f, 0.5f, 0.25f);
+  const Scene s = test::floorUnderSky(glm::vec3(0.5f), L);
+  const SceneTracer tracer(s);
+  EvalOptions o;
+  o.points = 16;
+  o.samplesPerPoint = 64;
+  o.progress = false;
+  const EvalReport r = computeReference(tracer, kContentDefault, o);
+  ASSERT_EQ(r.points.size(), 16u);
+  for (const EvalPoint& p : r.points) {
+    EXPECT_EQ(p.surface.normal, glm::vec3(0, 1, 0));
+    EXPECT_FALSE(p.indirectOnly) << "the sky lights the floor directly";
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(p.reference.irradiance[c], kPi * L[c], 4.0 * p.reference.stderror[c] + 1e-5 * kPi * L[c]);
+  }
+}
+
+// White furnace: inside a closed sphere of emission Le and albedo a, E = pi Le / (1 - a) everywhere (the
+// unbiased, Russian-roulette-only reference must not lose the tail of the bounces).
+TEST(ComputeReference, FurnaceMatchesClosedFormWithinStandardError) {
+  Scene s;
+  const float a = 0.5f;
+  const glm::vec3 Le(0.2f, 0.4f, 0.1f);
+  const uint32_t m = test::addMaterial(s, glm::vec3(a), Le);
+  test::addSphere(s, glm::vec3(0.0f), 2.0f, true, m, 12, 24);
+  const SceneTracer tracer(s);
+  EvalOptions o;
+  o.points = 8;
+  o.samplesPerPoint = 512;
+  o.progress = false;
+  const EvalReport r = computeReference(tracer, kContentDefault, o);
+  ASSERT_EQ(r.points.size(), 8u);
+  for (const EvalPoint& p : r.points)
+    for (int c = 0; c < 3; ++c) {
+      const double exact = kPi * Le[c] / (1.0 - a);
+      EXPECT_NEAR(p.reference.irradiance[c], exact, 5.0 * p.reference.stderror[c] + 1e-3 * exact)
+          << "channel " << c << " stderr " << p.reference.stderror[c];
+    }
+}
+
+// `tet`'s bytes are the sum of its sections, and the sections are the structures the lookup reads: the cell
+// grid and outer cells included (they were left out before).
+TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
+  const Scene s = test::floorUnderSky(glm::vec3(0.5f), glm::vec3(1.0f));
+  const SceneTracer tracer(s);
+  Level level = test::bakedLevel(tracer, test::probeGrid(), 16);
+  const ProbeQuery query(level);
+  const std::vector<LookupMethod> methods = standardMethods(level);
+  ASSERT_FALSE(methods.empty());
+  const LookupMethod& tet = methods[0];
+  ASSERT_EQ(tet.name, "tet");
+  EXPECT_EQ(tet.bytes, totalBytes(tet.sections));
+  EXPECT_EQ(tet.probes, level.probes.size());
+  auto section = [&](const std::string& name) {
+    for (const ByteSection& b : tet.sections)
+      if (b.name == name) return b.bytes;
+    ADD_FAILURE() << "no section " << name;
+    return uint64_t(0);
+  };
+  EXPECT_EQ(section("positions"), level.probes.size() * 12);
+  EXPECT_EQ(section("sh"), level.probes.size() * 108);
+  EXPECT_EQ(section("tets"), level.tets.size() * 80);
+  EXPECT_EQ(section("cell_grid"), cellGridBytes(query.cellGrid()));
+  EXPECT_GT(section("cell_grid"), 0u);
+  EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 80);
+  EXPECT_GT(section("outer_cells"), 0u);
+  EXPECT_EQ(section("start_grid"), query.startGrid().startTet.size() * 4);
+}
+
+// The shuffled timing order is a permutation of the coherent one (the same work, another order).
+TEST(TimingPoints, ShuffleIsAPermutation) {
+  TimingPoints t;
+  for (int i = 0; i < 100; ++i) {
+    t.position.push_back(glm::dvec3(i, 2 * i, 0));
+    t.normal.push_back(glm::vec3(0, 0, 1));
+  }
+  const TimingPoints s = shuffledTimingPoints(t, 7);
+  ASSERT_EQ(s.position.size(), 100u);
+  std::vector<int> seen(100, 0);
+  size_t moved = 0;
+  for (size_t i = 0; i < 100; ++i) {
+    ++seen[size_t(s.position[i].x)];
+    EXPECT_EQ(s.position[i].y, 2 * s.position[i].x);
+    moved += s.position[i].x != double(i);
+  }
+  for (int c : seen) EXPECT_EQ(c, 1);
+  EXPECT_GT(moved, 50u);
+}
+
+}  // namespace
+}  // namespace tetraprobe

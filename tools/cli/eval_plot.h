@@ -1,0 +1,29 @@
+// `tetraprobe eval --plot`: error against memory and against run time, one point per method (and per level of
+// a sweep), as a hand-written SVG of two panels. No dependencies.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace tetraprobe::cli {
+
+struct PlotPoint {
+  std::string method;                 // series: one colour per method, points of a series joined in x order
+  std::string label;                  // text beside the point (e.g. "1 m"); may be empty
+  double bytes = 0.0;                 // x of the left panel (log scale)
+  double time = 0.0;                  // x of the right panel (log scale); <= 0: the point is left out there
+  double meanRel = 0.0, gross = 0.0;  // y: mean_rel_error (filled circle), gross_error (open square)
+};
+
+struct PlotOptions {
+  std::string title;
+  std::string timeAxis = "GPU ms (1280x720 lookup pass)";
+  bool pareto = false;  // mark each panel's Pareto front (lowest error for at most that x), per measure
+};
+
+// The SVG document (UTF-8 text): left panel error against bytes, right panel error against `time`; both x
+// axes log10, y linear from 0. With options.pareto, the points on each measure's Pareto front over all
+// methods are ringed and joined by a dashed step line.
+std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions& options);
+
+}  // namespace tetraprobe::cli
