@@ -41,29 +41,25 @@ using Tds = CGAL::Triangulation_data_structure_3<VertexBase, CellBase, CGAL::Seq
 using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, Tds>;
 
 // The runtime reads probe positions as floats (Level::probes) and decides points near faces with weights
-// computed from them (exact signed volumes, runtime/src/query.cpp). A tet that is positively oriented in
-// double but flat or inverted once its local positions are rounded to float (near-duplicate probes that
-// collapse to one float, or a sliver thinner than the float spacing at its distance from the origin) would
-// give those weights a zero or wrong-signed volume: the runtime would fall back to equal weights. Checked
-// here with an exact orientation predicate on the rounded positions, so such a level is never written.
-void checkFloatOrientation(const glm::dvec3 (&local)[4], const Tet& rec, const std::string& name,
-                           const glm::dvec3& origin) {
-  Kernel::Point_3 q[4];
+// computed from them (exact signed volumes, runtime/src/query.cpp). Two probes of a tet that collapse to one
+// float position (near-duplicates: 1e-9 m apart at 1 m from the origin, 1 cm apart at 1000 km) make the tet
+// flat there for good, and the runtime would answer it with equal weights: refused here, naming the probes.
+// Tets that are flat or inverted in float without a collapse are kept: four probes coplanar in real numbers (a lattice face) are only
+// off their plane by double rounding, and CGAL keeps the zero-volume tet they form; refusing it would refuse
+// ordinary grids (tests/eval's probe grid has one). Such a tet holds no volume, so the walk rarely names it;
+// query.h documents its answer.
+void checkFloatCollapse(const glm::dvec3 (&local)[4], const Tet& rec, const std::string& name,
+                        const glm::dvec3& origin) {
   glm::vec3 f[4];
-  for (int i = 0; i < 4; ++i) {
-    f[i] = glm::vec3(local[i]);  // what Level::probes stores
-    q[i] = Kernel::Point_3(double(f[i].x), double(f[i].y), double(f[i].z));
-  }
-  if (CGAL::orientation(q[0], q[1], q[2], q[3]) == CGAL::POSITIVE) return;
-  std::string why = "is flat or inverted once its positions are rounded to float";
+  for (int i = 0; i < 4; ++i) f[i] = glm::vec3(local[i]);  // what Level::probes stores
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j)
       if (f[i] == f[j])
-        why = "has probes " + std::to_string(rec.v[i]) + " and " + std::to_string(rec.v[j]) +
-              " at the same float position (" + std::to_string(glm::length(local[i] - local[j])) +
-              " m apart)";
-  throw InputError(name + " " + why + " in the level frame at origin " + detail::describe(origin) +
-                   "; move or remove one of its probes, or put the level origin nearer the probes");
+        throw InputError(name + " has probes " + std::to_string(rec.v[i]) + " and " +
+                         std::to_string(rec.v[j]) + " at the same float position (" +
+                         std::to_string(glm::length(local[i] - local[j])) +
+                         " m apart) in the level frame at origin " + detail::describe(origin) +
+                         "; move or remove one of them, or put the level origin nearer the probes");
 }
 
 }  // namespace
@@ -164,7 +160,7 @@ std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const Te
                              std::to_string(rec.v[2]) + ", " + std::to_string(rec.v[3]) + ")";
     if (!finite)
       throw InputError(name + " is too flat for float barycentric rows; move or remove one of its probes");
-    checkFloatOrientation(p, rec, name, origin);
+    checkFloatCollapse(p, rec, name, origin);
   }
   return records;
 }
