@@ -27,10 +27,10 @@ std::vector<glm::dvec3> sliver(double h) {
   return {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, h}, {0.5, 0.5, 1.0}, {0.5, 0.5, -1.0}};
 }
 
-// Guard: runtime/src/query.cpp, walk(): near a face (nearFace) the walk switches to exactWeights() from the
-// probe positions; the float rows of a tet with condition number k err by ~6e-8 k in a weight (6e4 at 1e12).
-// Without the switch the weights at the sliver's faces are the rows' and the reference comparison fails.
-// Also finish() (the clamp to [0, 1] and renormalization) for points 1e-7 off a face.
+// Guard: runtime/src/query.cpp, finish(): the clamp to [0, 1] and renormalization (checked: without it the
+// points 1e-7 m off the sliver's faces get negative weights). These axis-aligned slivers' float rows are
+// nearly exact (entries powers of ten near 1), so walk()'s switch to exactWeights() is pinned by the cap,
+// needle, rotated-sliver and 1 cm to 1 km cases instead (checked: each fails without the switch).
 TEST(Stability, SliverWeightsStayInUnitIntervalUpToCondition1e12) {
   double worst = 0.0;
   for (double h : {1e-3, 1e-6, 1e-9, 1e-12}) {
@@ -46,8 +46,10 @@ TEST(Stability, SliverWeightsStayInUnitIntervalUpToCondition1e12) {
 }
 
 // A cap (a vertex 1e-10 m above the inside of its opposite face; the other probe only above it, so it stays
-// Delaunay) and a needle (a 1e-6 m triangle joined to probes 1 m away). Guard: as above, walk()'s switch to
-// exactWeights() near faces.
+// Delaunay) and a needle (a 1e-6 m triangle joined to probes 1 m away). Guards: walk()'s switch to
+// exactWeights() near faces (runtime/src/query.cpp), and buildTetRecords' choice of row offset
+// (tetra/src/tetrahedralize.cpp): with the centroid form everywhere the needle's rows err by 0.003 at a
+// vertex where rowErrorBound() says 1e-7, and the vertex gets weight 0.003 on a probe it should not see.
 TEST(Stability, CapsAndNeedlesGiveExactWeightsAndContinuousIrradiance) {
   const Level cap = test::makeLevel({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25, 0.25, 1e-10}, {0.3, 0.3, 1.0}},
                                     glm::dvec3(0.0), 4);
@@ -82,7 +84,9 @@ TEST(Stability, RotatedSliverTenKmOutStaysExact) {
 // Probes 1e-9 m apart 1 m from the level origin collapse to one float position: the tets between them are
 // flat in float, where the runtime's exact weights live. Guard: tetra/src/tetrahedralize.cpp,
 // checkFloatCollapse() (called by buildTetRecords): an InputError naming the two probes. Without it the
-// level is built, and queries in those tets fall back to equal weights (next test).
+// level is built, and queries in those tets fall back to equal weights (next test). Also exactWeights()
+// forming volumes from probe-to-probe edges: with volumes from x - p_i, a point 1e6 m outside the kept
+// level is named inside its condition-3.5e9 sliver.
 TEST(Stability, TetsFlatInFloatAreNamedAtBuild) {
   const std::vector<glm::dvec3> pts = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0},
                                        {0, 0, 2}, {1, 1, 1}, {1 + 1e-9, 1, 1}};
