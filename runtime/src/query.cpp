@@ -76,23 +76,30 @@ inline double rowErrorBound(const Tet& t, const glm::dvec3& x) {
 }
 
 // Barycentric weights of local point x in tet t computed in double from the probe positions: w_i is the
-// signed volume of the tet with vertex i moved to x, over the sum of the four (the tet's volume). With the
-// vertices taken relative to x each volume is a triple product of short vectors, accurate to ~1e-16 of the
-// tet's edge length cubed, so a weight is exact to ~1e-12 even on slivers and far from the origin.
+// signed volume of the tet with vertex i moved to x, over the tet's own volume. Each of those volumes is
+// (x - p) . n with n the cross product of two edges of the face opposite vertex i (short vectors between
+// probes, accurate to ~1e-16 of their length squared), and the tet's volume comes from its edges alone, so
+// a weight is exact to ~1e-16 x (condition number) near the tet (~1e-12 on the 1e4 slivers of placed
+// levels) and keeps its sign far from it. (Volumes formed from vectors x - p_i instead cancel to nothing at
+// 1e6 m from a sliver: they made a point 1e6 m outside the hull "inside" a tet of condition 3e9,
+// tests/stability.) The four need not sum to exactly 1; callers renormalize (finish()).
 inline void exactWeights(const Tet& t, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
                          double w[4]) {
   glm::dvec3 p[4];
-  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(probes[size_t(t.v[i])]) - x;
-  // det[q0 - q3 | q1 - q3 | q2 - q3] with q_i = 0 (x), the others p: reduced by column operations.
-  const double v0 = -glm::dot(p[3], glm::cross(p[1], p[2]));
-  const double v1 = glm::dot(p[0], glm::cross(p[2], p[3]));
-  const double v2 = -glm::dot(p[0], glm::cross(p[1], p[3]));
-  const double v3 = glm::dot(p[0], glm::cross(p[1], p[2]));
-  const double sum = v0 + v1 + v2 + v3;
-  w[0] = v0 / sum;
-  w[1] = v1 / sum;
-  w[2] = v2 / sum;
-  w[3] = v3 / sum;
+  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(probes[size_t(t.v[i])]);
+  const glm::dvec3 e0 = p[0] - p[3], e1 = p[1] - p[3], e2 = p[2] - p[3], d3 = x - p[3];
+  // D(a, b, c, d) = (a - d) . ((b - d) x (c - d)): the tet's volume is D(p0, p1, p2, p3), and vertex i moved
+  // to x gives v0 = D(x, p1, p2, p3), v1 = D(p0, x, p2, p3), v2 = D(p0, p1, x, p3) (cyclic triple products
+  // about p3), v3 = D(p0, p1, p2, x) = -D(x, p0, p1, p2) (about p2).
+  const double volume = glm::dot(e0, glm::cross(e1, e2));
+  const double v0 = glm::dot(d3, glm::cross(e1, e2));
+  const double v1 = glm::dot(d3, glm::cross(e2, e0));
+  const double v2 = glm::dot(d3, glm::cross(e0, e1));
+  const double v3 = -glm::dot(x - p[2], glm::cross(p[0] - p[2], p[1] - p[2]));
+  w[0] = v0 / volume;
+  w[1] = v1 / volume;
+  w[2] = v2 / volume;
+  w[3] = v3 / volume;
 }
 
 // True when the float rows put x inside tet t by more than their rounding could move (the smallest weight

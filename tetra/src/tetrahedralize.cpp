@@ -40,6 +40,28 @@ using CellBase = CGAL::Triangulation_cell_base_with_info_3<int32_t, Kernel,
 using Tds = CGAL::Triangulation_data_structure_3<VertexBase, CellBase, CGAL::Sequential_tag>;
 using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, Tds>;
 
+// The runtime reads probe positions as floats (Level::probes) and decides points near faces with weights
+// computed from them (exact signed volumes, runtime/src/query.cpp). Two probes of a tet that collapse to one
+// float position (near-duplicates: 1e-9 m apart at 1 m from the origin, 1 cm apart at 1000 km) make the tet
+// flat there for good, and the runtime would answer it with equal weights: refused here, naming the probes.
+// Tets that are flat or inverted in float without a collapse are kept: four probes coplanar in real numbers (a lattice face) are only
+// off their plane by double rounding, and CGAL keeps the zero-volume tet they form; refusing it would refuse
+// ordinary grids (tests/eval's probe grid has one). Such a tet holds no volume, so the walk rarely names it;
+// query.h documents its answer.
+void checkFloatCollapse(const glm::dvec3 (&local)[4], const Tet& rec, const std::string& name,
+                        const glm::dvec3& origin) {
+  glm::vec3 f[4];
+  for (int i = 0; i < 4; ++i) f[i] = glm::vec3(local[i]);  // what Level::probes stores
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j)
+      if (f[i] == f[j])
+        throw InputError(name + " has probes " + std::to_string(rec.v[i]) + " and " +
+                         std::to_string(rec.v[j]) + " at the same float position (" +
+                         std::to_string(glm::length(local[i] - local[j])) +
+                         " m apart) in the level frame at origin " + detail::describe(origin) +
+                         "; move or remove one of them, or put the level origin nearer the probes");
+}
+
 }  // namespace
 
 TetMesh tetrahedralizeDelaunay(const std::vector<glm::dvec3>& points) {
@@ -100,6 +122,12 @@ std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const Te
     const glm::dmat3 m = glm::inverse(a);
     const glm::dvec3 centroid = 0.25 * (p[0] + p[1] + p[2] + p[3]);
     bool finite = det != 0.0 && std::isfinite(det);
+    // The tet's bounding box, for the choice of offset below.
+    glm::dvec3 lo = p[0], hi = p[0];
+    for (int i = 1; i < 4; ++i) {
+      lo = glm::min(lo, p[i]);
+      hi = glm::max(hi, p[i]);
+    }
     for (int i = 0; i < 3; ++i) {
       // Row i of M is (m[0][i], m[1][i], m[2][i]) in glm's [column][row] indexing, rounded to float. The
       // offset -(M P3)_i equals 0.25 - M_i . centroid; it is computed from the *rounded* row so that the
@@ -108,14 +136,31 @@ std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const Te
       for (int j = 0; j < 3; ++j) rec.row[i][j] = float(m[j][i]);
       const double offset = 0.25 - (double(rec.row[i][0]) * centroid.x + double(rec.row[i][1]) * centroid.y +
                                     double(rec.row[i][2]) * centroid.z);
-      rec.row[i][3] = float(offset);
+      // That offset makes the weight's error (rounded row - exact row) . (x - centroid), up to 2^-24
+      // sum_j |row_j| |x_j - c_j|; the runtime bounds it by 2^-23 (sum_j |row_j x_j| + |offset|)
+      // (runtime/src/query.cpp, rowErrorBound), which a tet near the local origin with a steep row (a needle
+      // or sliver there: |offset| small by cancellation, |x| small) can miss by far: 0.003 in a weight where
+      // the bound said 1e-7 (tests/stability, CapsAndNeedles...). Where the bound does not cover that error
+      // for every point of the tet's box, the offset is the plain -(M P3)_i from the double row instead,
+      // whose error (rounded row - exact row) . x + one rounding is what the bound assumes.
+      double spread = 0.0, least = 0.0;
+      for (int j = 0; j < 3; ++j) {
+        const double r = std::abs(double(rec.row[i][j]));
+        spread += r * std::max(hi[j] - centroid[j], centroid[j] - lo[j]);
+        least += r * (lo[j] > 0.0 ? lo[j] : (hi[j] < 0.0 ? -hi[j] : 0.0));
+      }
+      if (spread <= 2.0 * least + std::abs(double(float(offset))))
+        rec.row[i][3] = float(offset);
+      else
+        rec.row[i][3] = float(-(m[0][i] * p[3].x + m[1][i] * p[3].y + m[2][i] * p[3].z));
       for (int j = 0; j < 4; ++j) finite = finite && std::isfinite(rec.row[i][j]);
     }
+    const std::string name = "buildTetRecords: tet " + std::to_string(t) + " (probes " +
+                             std::to_string(rec.v[0]) + ", " + std::to_string(rec.v[1]) + ", " +
+                             std::to_string(rec.v[2]) + ", " + std::to_string(rec.v[3]) + ")";
     if (!finite)
-      throw InputError("buildTetRecords: tet " + std::to_string(t) + " (probes " + std::to_string(rec.v[0]) +
-                       ", " + std::to_string(rec.v[1]) + ", " + std::to_string(rec.v[2]) + ", " +
-                       std::to_string(rec.v[3]) +
-                       ") is too flat for float barycentric rows; move or remove one of its probes");
+      throw InputError(name + " is too flat for float barycentric rows; move or remove one of its probes");
+    checkFloatCollapse(p, rec, name, origin);
   }
   return records;
 }

@@ -53,6 +53,14 @@ class ProbeQuery {
   // ~1e-4 on slivers) the walk decides with weights computed in double from the four probe positions, so the
   // tet named holds the point with exact weights within [-1e-6, 1 + 1e-6] and those are the weights returned.
   //
+  // Those exact weights come from the float probe positions (Level::probes). A tet that is flat there has
+  // none: a point decided in it gets the equal weights 0.25 on its four probes with `inside` false (finite,
+  // within the probes' range, but not an interpolation). The build refuses tets whose probes collapse to one
+  // float (buildTetRecords, tetra/tetrahedralize.h); a zero-volume tet on a lattice face, coplanar but for
+  // double rounding, may remain, and holds no volume for a point to be in but its own plane.
+  // Slivers that are positively oriented in float are answered exactly, whatever their condition number
+  // (tests/stability: up to 1e12).
+  //
   // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet is the one the
   // sparse cell grid's BSP leaf names (cell_grid.h), which holds the point but within rounding of its faces;
   // a point whose cell is absent, or whose leaf is empty, starts from the coarse start grid and ends in the

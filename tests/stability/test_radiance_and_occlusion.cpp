@@ -1,0 +1,276 @@
+// Extreme radiance (SH from a 1e6 W/m^2 source, all-zero probes) and occlusion at its edges: a wall passing
+// exactly through probes, and the seam the per-tet occlusion data can leave on a face two tets share.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "../occlusion/test_levels.h"
+#include "stability_checks.h"
+#include "tetraprobe/bake/bake.h"
+#include "tetraprobe/occlusion/build_occlusion.h"
+#include "tetraprobe/runtime/occlusion.h"
+
+namespace tetraprobe {
+namespace {
+
+using stability::checkLevel;
+
+std::vector<glm::dvec3> lattice(int n, double spacing) {
+  std::vector<glm::dvec3> pts;
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) pts.emplace_back(spacing * x, spacing * y, spacing * z);
+  return pts;
+}
+
+// Incident radiance of a distant source of irradiance `e` (W/m^2) from unit direction d, projected on SH L2:
+// L_lm = e Y_lm(d) (a delta in direction d), in every channel.
+ShRgb deltaSource(double e, const glm::dvec3& d) {
+  const auto y = shBasis<double>(d.x, d.y, d.z);
+  ShRgb sh;
+  for (int k = 0; k < kShCoeffCount; ++k) sh.c[size_t(k)] = glm::vec3(float(e * y[size_t(k)]));
+  return sh;
+}
+
+// A spherical Fibonacci set of unit normals.
+std::vector<glm::vec3> normals(int count) {
+  std::vector<glm::vec3> n;
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - (i + 0.5) * 2.0 / count, r = std::sqrt(1.0 - z * z);
+    n.emplace_back(float(r * std::cos(golden * i)), float(r * std::sin(golden * i)), float(z));
+  }
+  return n;
+}
+
+// Each probe sees a 1e6 W/m^2 source from its own direction (a sun, a welding arc); projected on L2 its
+// irradiance rings to -4 % of the mean on the far side. After deringing (the bake's default) every probe's
+// and every interpolated irradiance is >= -1e-5 of the mean (kDeringTolerance) and within the probes' range,
+// finite, and continuous across faces at 1e6 scale. Guard: deringProbes() (bake/src/dering.cpp); without it
+// the probes' own irradiance at their far side is -4e4 W/m^2.
+TEST(Stability, MegawattSourceStaysFiniteAndNonNegativeAfterDering) {
+  const std::vector<glm::dvec3> pts = lattice(3, 1.0);
+  Level level = test::makeLevel(pts, glm::dvec3(1.0), 16);
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> g;
+  for (ShRgb& sh : level.sh) sh = deltaSource(1e6, glm::normalize(glm::dvec3(g(rng), g(rng), g(rng))));
+  DeringOptions dering;
+  dering.threads = 1;
+  deringProbes(level.sh, dering);
+  const double mean =
+      std::numbers::pi * sh_const::kY00 * 1e6 * sh_const::kY00;  // pi Y00 L00: the mean irradiance
+  const double floor = -kDeringTolerance * mean * 1.01;          // 1 % for the float evaluation
+  double lowest = 1e300;
+  for (const ShRgb& sh : level.sh)
+    for (const glm::vec3& n : normals(512)) {
+      const glm::vec3 e = shIrradiance(sh, n);
+      lowest = std::min<double>(lowest, std::min({e.x, e.y, e.z}));
+      ASSERT_GE(e.x, floor) << "probe irradiance " << e.x;
+    }
+  const ProbeQuery query(level);
+  for (const Tet& t : level.tets)
+    for (const glm::vec3& n : normals(64)) {
+      glm::dvec3 c(0.0);
+      for (int i = 0; i < 4; ++i) c += 0.25 * glm::dvec3(level.probes[size_t(t.v[i])]);
+      const glm::vec3 e = query.irradiance(level.origin + c, n);
+      ASSERT_TRUE(std::isfinite(e.x));
+      ASSERT_GE(e.x, floor - stability::kRelRange * 1e6) << "interpolated irradiance";
+    }
+  for (const glm::vec3& n : {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(1, -2, 0.5f))}) {
+    checkLevel(level, "1e6 W/m^2 sources", stability::kRelRange, n);
+    ASSERT_FALSE(HasFatalFailure());
+  }
+  RecordProperty("lowest_probe_irradiance", std::to_string(lowest));
+  std::printf("[1e6 W/m^2] lowest probe irradiance after dering %.4g W/m^2 (mean %.4g)\n", lowest, mean);
+}
+
+// All-zero probes (an unlit level, or a level baked before its lights were placed): every answer is exactly
+// 0 and finite, inside, on faces, outside at 1e6 m, with and without the deringer. No guard in the code is
+// needed: nothing divides by a probe's energy (the deringer's tolerance scales with the mean, so a zero probe
+// is left as it is); the case pins that none is introduced.
+TEST(Stability, AllZeroProbesAnswerExactlyZero) {
+  const ShRgb zero{};
+  Level level = test::makeLevel(lattice(3, 1.0), glm::dvec3(1.0), 18, &zero);
+  DeringOptions dering;
+  dering.threads = 1;
+  const DeringStats st = deringProbes(level.sh, dering);
+  EXPECT_EQ(st.deringedProbes, 0u);
+  for (const ShRgb& sh : level.sh)
+    for (const glm::vec3& c : sh.c) ASSERT_EQ(c, glm::vec3(0.0f));
+  const ProbeQuery query(level);
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> u(-1.0, 3.0);
+  for (int k = 0; k < 2000; ++k) {
+    const glm::dvec3 x = level.origin + glm::dvec3(u(rng), u(rng), u(rng)) * (k % 10 == 0 ? 1e6 : 1.0);
+    ASSERT_EQ(query.irradiance(x, glm::vec3(0, 0, 1)), glm::vec3(0.0f));
+    ASSERT_EQ(query.irradiance(x, glm::vec3(0.0f)), glm::vec3(0.0f));
+  }
+  checkLevel(level, "all-zero probes");
+}
+
+OcclusionOptions quiet() {
+  OcclusionOptions o;
+  o.progress = false;
+  o.threads = 1;
+  return o;
+}
+
+// Probes below a wall lit (1 W/m^2 ambient), above it dark (0.01), on it in between.
+ShRgb ambient(float e) {
+  ShRgb sh;
+  sh.c[0] = glm::vec3(e / float(std::numbers::pi * sh_const::kY00));  // E = pi Y00 L00 for any normal
+  return sh;
+}
+
+// Every answer with occlusion: finite, the located weights after occlusion in [0, 1] summing to 1, and the
+// irradiance within the tet's probes' range (occludedIrradiance blends convex combinations only).
+void checkOccludedQuery(const ProbeQuery& query, const glm::dvec3& w, const glm::vec3& n) {
+  const Level& level = query.level();
+  const Location loc = query.locate(w);
+  ASSERT_GE(loc.tet, 0);
+  const glm::vec4 vis = occlusionVisibility(level, level.occlusion, loc.tet, glm::vec3(w - level.origin), n);
+  const glm::vec4 ow = applyOcclusion(loc.weights, vis);
+  double sum = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(std::isfinite(ow[i])) << stability::where(w);
+    ASSERT_GE(ow[i], 0.0f);
+    ASSERT_LE(ow[i], 1.0f);
+    sum += ow[i];
+  }
+  ASSERT_NEAR(sum, 1.0, stability::kWeightSum) << stability::where(w);
+  const glm::vec3 e = query.irradiance(w, n);
+  const stability::ProbeRange r = stability::probeRange(level, level.tets[size_t(loc.tet)], n);
+  for (int c = 0; c < 3; ++c) {
+    ASSERT_TRUE(std::isfinite(e[c])) << stability::where(w);
+    ASSERT_GE(e[c], r.lo[c] - stability::kRelRange * r.scale) << stability::where(w);
+    ASSERT_LE(e[c], r.hi[c] + stability::kRelRange * r.scale) << stability::where(w);
+  }
+}
+
+// A wall (z = 1) passing exactly through nine probes of a 3x3x3 lattice: tets touching it only at those
+// probes store nothing, tets it cuts store planes in which the on-wall probes sit at plane value 0. At every
+// tet's vertices, edge and face points and centroid, and at points on the wall with either normal, the
+// answer is finite, its occluded weights sum to 1 and its irradiance is within the probes' range. Guard:
+// applyOcclusion() (runtime/src/occlusion.cpp) renormalizes the visible weights (and falls back when none
+// is visible); without the renormalization the weights on the wall sum to about 0.5.
+TEST(Stability, WallThroughProbesGivesFiniteNormalizedAnswers) {
+  Scene scene = test::emptyScene();
+  test::addAxisQuad(scene, 2, 1.0f, {-1, -1}, {3, 3});
+  const SceneTracer tracer(scene);
+  Level level = test::makeLevel(lattice(3, 1.0), glm::dvec3(0.0), 20);
+  for (size_t i = 0; i < level.probes.size(); ++i) {
+    const float z = level.probes[i].z;
+    level.sh[i] = ambient(z < 0.5f ? 1.0f : (z < 1.5f ? 0.5f : 0.01f));
+  }
+  OcclusionStats st;
+  level.occlusion = buildOcclusion(tracer, level, quiet(), &st);
+  ASSERT_FALSE(level.occlusion.empty());
+  const ProbeQuery query(level);
+  for (const Tet& t : level.tets) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(t.v[i])]);
+    std::vector<glm::dvec3> xs = {0.25 * (p[0] + p[1] + p[2] + p[3])};
+    for (int i = 0; i < 4; ++i) {
+      xs.push_back(p[i]);
+      for (int j = i + 1; j < 4; ++j) xs.push_back(0.5 * (p[i] + p[j]));
+      xs.push_back((p[(i + 1) & 3] + p[(i + 2) & 3] + p[(i + 3) & 3]) / 3.0);
+    }
+    for (const glm::dvec3& x : xs)
+      for (const glm::vec3& n : {glm::vec3(0.0f), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)}) {
+        checkOccludedQuery(query, level.origin + x, n);
+        ASSERT_FALSE(HasFatalFailure());
+      }
+  }
+  for (double y = 0.05; y < 2.0; y += 0.3)
+    for (double x = 0.05; x < 2.0; x += 0.3)
+      for (const glm::vec3& n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)}) {
+        checkOccludedQuery(query, glm::dvec3(x, y, 1.0), n);
+        ASSERT_FALSE(HasFatalFailure());
+      }
+  std::printf("[wall through probes] %zu tets, %zu with geometry, %zu planes tets, agreement %.3f\n", st.tets,
+              st.tetsWithGeometry, st.planeTets, st.agreement);
+}
+
+// Occlusion across a shared face: a tilted wall (through no probe) cuts a 4x4x4 lattice, lit below, dark
+// above. At random points of every interior face where either tet stores occlusion, at least 0.1 m from the
+// wall (the wall itself is a true edge of the lighting), the irradiance with occlusion is compared 1e-6 m
+// either side of the face, for volume points (zero normal) and surface-like normals along the wall's.
+// Continuity inside one tet holds by construction (smooth visibility); across faces each tet has its own
+// planes (fitted to its own clipped geometry and samples), cell masks and falloff band (in units of its own
+// largest probe distance), and a tet the wall misses stores nothing, so the two sides need not agree.
+// MEASURED SEAM (not fixed here; the cause is the per-tet representation, docs/stability.md): largest jump
+// 0.82 of the lit irradiance, 219 of 4,014 face points above 1e-3 (recorded as largest_seam and
+// seams_above_1e-3). The slopes explain at most ~1e-6 of it. No guard exists yet: the bounds below are
+// today's figures with a margin, a regression check until a fix (data agreeing on shared faces) lets them
+// shrink to the kRelRange the plain interpolation meets.
+constexpr double kSeamTolerance = 0.9;
+constexpr size_t kSeamPointsAbove = 260;
+TEST(Stability, OcclusionSeamAcrossSharedFacesIsMeasured) {
+  Scene scene = test::emptyScene();
+  const glm::vec3 wn = glm::normalize(glm::vec3(0.3f, 0.2f, 1.0f)), c(1.5f, 1.5f, 1.45f);
+  const glm::vec3 tu = glm::normalize(glm::cross(wn, glm::vec3(1, 0, 0))), tv = glm::cross(wn, tu);
+  test::addQuad(scene, c - 4.0f * tu - 4.0f * tv, c + 4.0f * tu - 4.0f * tv, c + 4.0f * tu + 4.0f * tv,
+                c - 4.0f * tu + 4.0f * tv);
+  const SceneTracer tracer(scene);
+  Level level = test::makeLevel(lattice(4, 1.0), glm::dvec3(0.0), 21);
+  const auto side = [&](const glm::dvec3& p) { return glm::dot(glm::vec3(p) - c, wn); };
+  for (size_t i = 0; i < level.probes.size(); ++i)
+    level.sh[i] = ambient(side(glm::dvec3(level.probes[i])) < 0.0 ? 1.0f : 0.01f);
+  OcclusionStats st;
+  level.occlusion = buildOcclusion(tracer, level, quiet(), &st);
+  ASSERT_FALSE(level.occlusion.empty());
+  const ProbeQuery query(level);
+  std::mt19937_64 rng(22);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double largest = 0.0;
+  size_t faces = 0, points = 0, above = 0;
+  glm::dvec3 worstAt(0.0);
+  for (size_t ti = 0; ti < level.tets.size(); ++ti) {
+    const Tet& t = level.tets[ti];
+    for (int f = 0; f < 4; ++f) {
+      const int32_t nb = t.n[f];
+      if (nb < int32_t(ti)) continue;
+      if (level.occlusion.tets[ti].kind() == kOcclusionNone &&
+          level.occlusion.tets[size_t(nb)].kind() == kOcclusionNone)
+        continue;
+      ++faces;
+      const glm::dvec3 a(level.probes[size_t(t.v[(f + 1) & 3])]), b(level.probes[size_t(t.v[(f + 2) & 3])]),
+          cc(level.probes[size_t(t.v[(f + 3) & 3])]);
+      const glm::dvec3 n = stability::faceNormal(level, t, f);
+      for (int k = 0; k < 16; ++k) {
+        double b0 = u(rng), b1 = u(rng);
+        if (b0 + b1 > 1.0) b0 = 1.0 - b0, b1 = 1.0 - b1;
+        const glm::dvec3 x = a * b0 + b * b1 + cc * (1.0 - b0 - b1);
+        if (std::abs(side(x)) < 0.1) continue;
+        for (const glm::vec3& sn : {glm::vec3(0.0f), wn, -wn}) {
+          const glm::vec3 e0 = query.irradiance(level.origin + x - 1e-6 * n, sn);
+          const glm::vec3 e1 = query.irradiance(level.origin + x + 1e-6 * n, sn);
+          ASSERT_TRUE(std::isfinite(e0.x) && std::isfinite(e1.x));
+          const double jump = stability::maxAbs(e1 - e0);  // lit irradiance is 1 W/m^2
+          ++points;
+          above += jump > 1e-3;
+          if (jump > largest) largest = jump, worstAt = x;
+        }
+      }
+    }
+  }
+  std::printf(
+      "[occlusion seam] %zu tets (%zu with data), %zu faces, %zu points: largest jump %.4g at %s, %zu "
+      "above 1e-3 (relative to the lit irradiance)\n",
+      level.tets.size(), st.planeTets + st.shadowMapTets, faces, points, largest,
+      stability::where(worstAt).c_str(), above);
+  RecordProperty("largest_seam", std::to_string(largest));
+  RecordProperty("seams_above_1e-3", std::to_string(above));
+  RecordProperty("seam_points", std::to_string(points));
+  EXPECT_GT(points, 100u);
+  EXPECT_LE(largest, kSeamTolerance);
+  EXPECT_LE(above, kSeamPointsAbove);
+}
+
+}  // namespace
+}  // namespace tetraprobe
