@@ -408,7 +408,7 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
   write("point.csv", "0.05,2,0,1,0,0\n-0.05,2,0,-1,0,0\n");
   const std::string common = path("wall.obj").string() + " --placement none --probes " +
                              path("probes.csv").string() +
-                             " --occlusion shadow-maps --samples 512 --noise 0 --threads 2";
+                             " --occlusion shadow-maps --samples 512 --noise 0 --probe-budget 0 --threads 2";
   ASSERT_EQ(run("bake " + common + " --fill-holes 0 -o " + path("before.tpb").string()).code, 0);
   const CliRun after = run("bake " + common + " -o " + path("after.tpb").string());
   ASSERT_EQ(after.code, 0) << after.err;
