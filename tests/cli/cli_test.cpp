@@ -211,7 +211,7 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
 }
 
 // Query: below a ceiling light, a surface facing up (toward the light) receives much more than one facing
-// down, and the batch form agrees with the single form line by line.
+// down, the batch form agrees with the single form line by line, and --explain's probes give the answer.
 TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
@@ -229,6 +229,31 @@ TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {
   const CliRun batch = run("query " + path("l.tpb").string() + " --points " + path("pts.csv").string());
   ASSERT_EQ(batch.code, 0) << batch.err;
   EXPECT_EQ(batch.out, up.out + down.out);
+
+  // --explain: the first line is the same answer; four probe rows whose weights (after occlusion) sum to
+  // 1 and whose weighted irradiance is the answer (no fallback inside a closed box). Printed to 4 digits:
+  // 1 % tolerance.
+  const CliRun ex = run("query " + path("l.tpb").string() + " 2 1.5 2 0 1 0 --explain");
+  ASSERT_EQ(ex.code, 0) << ex.err;
+  EXPECT_EQ(ex.out.substr(0, up.out.size()), up.out);
+  std::istringstream lines(ex.out);
+  std::string line;
+  int rows = 0;
+  double weightSum = 0.0, blendG = 0.0;
+  while (std::getline(lines, line)) {
+    int probe;
+    char pos[3][32];
+    float dist, w, vis, after, er, eg, eb;
+    if (std::sscanf(line.c_str(), " %d %31[^,], %31[^,], %31s %f %f %f %f %f, %f, %f", &probe, pos[0], pos[1],
+                    pos[2], &dist, &w, &vis, &after, &er, &eg, &eb) == 11) {
+      ++rows;
+      weightSum += after;
+      blendG += double(after) * eg;
+    }
+  }
+  EXPECT_EQ(rows, 4) << ex.out;
+  EXPECT_NEAR(weightSum, 1.0, 1e-3) << ex.out;
+  EXPECT_NEAR(blendG, ug, 0.01 * ug) << ex.out;
 
   write("bad.csv", "2,1.5,2,0,1\n");
   const CliRun bad = run("query " + path("l.tpb").string() + " --points " + path("bad.csv").string());

@@ -9,7 +9,9 @@
 #include "args.h"
 #include "commands.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe::cli {
 
@@ -22,6 +24,59 @@ glm::vec3 normalOrThrow(glm::vec3 n, const std::string& where) {
   return n / len;
 }
 
+const char* occlusionKindText(const Level& level, int32_t tet) {
+  if (level.occlusion.empty()) return "none stored in the level";
+  switch (level.occlusion.tets[size_t(tet)].kind()) {
+    case kOcclusionPlanes:
+      return "planes";
+    case kOcclusionShadowMaps:
+      return "shadow maps";
+    default:
+      return "none (no geometry cuts this tet)";
+  }
+}
+
+// What the answer is made of, in the runtime's own terms (ProbeQuery::shade): the tet, its probes, the
+// occlusion data's visibility and the fallback share. Printed after the r,g,b line so scripts can read line 1.
+void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n, const glm::vec3& answer) {
+  const Level& level = query.level();
+  const Location loc = query.locate(world);
+  if (loc.tet < 0) {
+    std::printf("explain: the level has no tets\n");
+    return;
+  }
+  const Tet& t = level.tets[size_t(loc.tet)];
+  if (loc.outerCell >= 0)
+    std::printf("explain: outside the hull, outer cell %d of hull tet %d (weights on its hull face)\n",
+                loc.outerCell, loc.tet);
+  else
+    std::printf("explain: inside tet %d\n", loc.tet);
+  std::printf("  occlusion: %s\n", occlusionKindText(level, loc.tet));
+  const glm::vec3 local(world - level.origin);
+  const glm::vec4 vis = query.usesOcclusion() ? occlusionVisibility(level, level.occlusion, loc.tet, local, n)
+                                              : glm::vec4(1.0f);
+  float fallback = 0.0f;
+  const glm::vec4 occluded = applyOcclusion(loc.weights, vis, &fallback);
+  std::printf("  %-8s %-36s %9s %8s %10s %9s  %s\n", "probe", "position (world, m)", "distance", "weight",
+              "visibility", "after occ", "E(n) r,g,b W/m^2");
+  for (int i = 0; i < 4; ++i) {
+    const int32_t p = t.v[i];
+    const glm::dvec3 pw = level.origin + glm::dvec3(level.probes[size_t(p)]);
+    const glm::vec3 ep = shIrradiance(level.sh[size_t(p)], n);
+    char pos[64];
+    std::snprintf(pos, sizeof pos, "%.3f, %.3f, %.3f", pw.x, pw.y, pw.z);
+    std::printf("  %-8d %-36s %9.3f %8.4f %10.3f %9.4f  %.4g, %.4g, %.4g\n", p, pos, glm::length(pw - world),
+                loc.weights[i], vis[i], occluded[i], ep.r, ep.g, ep.b);
+  }
+  if (fallback > 0.0f)
+    std::printf(
+        "  fallback share %.3f: the data says the point sees %s of its probes; the answer blends toward the "
+        "nearest probe capped by the unoccluded blend (docs/occlusion.md)\n",
+        fallback, fallback >= 1.0f ? "none" : "little");
+  std::printf("  answer %.4g, %.4g, %.4g W/m^2 (luminance %.4g)\n", answer.r, answer.g, answer.b,
+              0.2126 * answer.r + 0.7152 * answer.g + 0.0722 * answer.b);
+}
+
 }  // namespace
 
 int cmdQuery(int argc, char** argv) {
@@ -30,7 +85,11 @@ int cmdQuery(int argc, char** argv) {
       "Prints irradiance E (W/m^2, r,g,b) from the probes at world positions with surface normals\n"
       "(default normal 0,1,0). With --points, reads lines x,y,z,nx,ny,nz and prints one r,g,b line each.",
       {{"--points", "", "FILE.csv", "query every line of this file", ""},
-       {"--threads", "", "N", "worker threads for --points, 0 = all cores", "0"}});
+       {"--threads", "", "N", "worker threads for --points, 0 = all cores", "0"},
+       {"--explain", "", "",
+        "single point: also print why (its tet, each probe's position, distance, weight, visibility from the "
+        "occlusion data and irradiance, the fallback share): where a spot is too dark or too bright",
+        ""}});
   if (!args.parse(argc, argv)) return 0;
   if (args.positional().empty()) throw UsageError("missing LEVEL.tpb");
   Level level;
@@ -77,8 +136,10 @@ int cmdQuery(int argc, char** argv) {
   for (size_t i = 1; i < args.positional().size(); ++i)
     v[i - 1] = parseNumber(args.positional()[i], "coordinate");
   const glm::vec3 n = normalOrThrow(glm::vec3(float(v[3]), float(v[4]), float(v[5])), "normal");
-  const glm::vec3 e = query.irradiance(glm::dvec3(v[0], v[1], v[2]), n);
+  const glm::dvec3 world(v[0], v[1], v[2]);
+  const glm::vec3 e = query.irradiance(world, n);
   std::printf("%.9g,%.9g,%.9g\n", e.x, e.y, e.z);
+  if (args.has("--explain")) explain(query, world, n, e);
   return 0;
 }
 
