@@ -41,7 +41,7 @@ using render_detail::vkCheck;
 using render_detail::VulkanContext;
 
 constexpr int kImageCount = 4;           // read back: color, position, normal, albedo
-constexpr uint32_t kMaxTimestamps = 16;  // frame start + one per pass
+constexpr uint32_t kMaxTimestamps = 16;  // two per pass
 
 // Push constants of every compute pass (lighting.comp reads the first 12 bytes).
 struct ComputePush {
@@ -156,28 +156,6 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Timestamps after each pass of a recorded frame (after a barrier: lavapipe runs dispatches asynchronously
-// and only a barrier waits for them). Pass i lasts from timestamp i to timestamp i + 1.
-class PassClock {
- public:
-  PassClock(VkCommandBuffer cmd, VkQueryPool pool) : cmd_(cmd), pool_(pool) {
-    if (pool_ == VK_NULL_HANDLE) return;
-    vkCmdResetQueryPool(cmd_, pool_, 0, kMaxTimestamps);
-    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool_, 0);
-  }
-  void mark(const char* pass) {
-    names_.push_back(pass);
-    if (pool_ != VK_NULL_HANDLE)
-      vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, uint32_t(names_.size()));
-  }
-  const std::vector<std::string>& names() const { return names_; }
-
- private:
-  VkCommandBuffer cmd_;
-  VkQueryPool pool_;
-  std::vector<std::string> names_;
-};
-
 VkCommandBuffer allocateCommandBuffer(const VulkanContext& ctx, CleanupStack& cleanup) {
   const VkDevice device = ctx.device();
   VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -190,6 +168,45 @@ VkCommandBuffer allocateCommandBuffer(const VulkanContext& ctx, CleanupStack& cl
   cleanup.push([device, pool, cmd] { vkFreeCommandBuffers(device, pool, 1, &cmd); });
   return cmd;
 }
+
+// A frame as one command buffer per pass, each between two timestamps: TOP_OF_PIPE before its commands and
+// BOTTOM_OF_PIPE after them and a closing barrier. One buffer per pass because lavapipe, which runs
+// dispatches asynchronously, does not order a timestamp between two passes of one command buffer after the
+// first pass's work (measured: two full-screen dispatches both landed before the timestamp written between
+// them); a submission boundary with a fence wait between passes does.
+class PassRecorder {
+ public:
+  PassRecorder(const VulkanContext& ctx, CleanupStack& cleanup, VkQueryPool pool)
+      : ctx_(ctx), cleanup_(cleanup), pool_(pool) {}
+  VkCommandBuffer begin() {
+    buffers_.push_back(allocateCommandBuffer(ctx_, cleanup_));
+    const VkCommandBuffer cmd = buffers_.back();
+    VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    vkCheck(vkBeginCommandBuffer(cmd, &info), "vkBeginCommandBuffer");
+    const auto q = uint32_t(2 * names_.size());
+    if (pool_ != VK_NULL_HANDLE) {
+      vkCmdResetQueryPool(cmd, pool_, q, 2);
+      vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool_, q);
+    }
+    return cmd;
+  }
+  void end(const char* pass) {
+    const VkCommandBuffer cmd = buffers_.back();
+    if (pool_ != VK_NULL_HANDLE)
+      vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, uint32_t(2 * names_.size() + 1));
+    vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+    names_.push_back(pass);
+  }
+  const std::vector<VkCommandBuffer>& buffers() const { return buffers_; }
+  const std::vector<std::string>& names() const { return names_; }
+
+ private:
+  const VulkanContext& ctx_;
+  CleanupStack& cleanup_;
+  VkQueryPool pool_;
+  std::vector<VkCommandBuffer> buffers_;
+  std::vector<std::string> names_;
+};
 
 // Submits `cmd` and waits for it. Waits before anything can throw, so the cleanup never destroys objects in
 // use.
@@ -536,12 +553,11 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     cleanup.push([device, queryPool] { vkDestroyQueryPool(device, queryPool, nullptr); });
   }
 
-  // Record one frame; it is submitted warmupFrames + timedFrames times.
-  const VkCommandBuffer cmd = allocateCommandBuffer(ctx, cleanup);
-  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  vkCheck(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-  PassClock clock(cmd, queryPool);
+  // Record one frame, a command buffer per pass; it is submitted warmupFrames + timedFrames times.
+  PassRecorder clock(ctx, cleanup, queryPool);
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
   if (full && !shadowFramebuffers.empty()) {
+    cmd = clock.begin();
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, shadowPipeline);
     const VkDeviceSize offset = 0;
     vkCmdBindVertexBuffers(cmd, 0, 1, &vertices.buffer, &offset);
@@ -562,8 +578,11 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       }
       vkCmdEndRenderPass(cmd);
     }
-    clock.mark("shadow_maps");
-  } else if (full) {  // the stand-in layer, never read (no lights), still needs its sampled layout
+    clock.end("shadow_maps");
+  }
+  cmd = clock.begin();
+  if (full && shadowFramebuffers
+                  .empty()) {  // the stand-in layer, never read (no lights), still needs its sampled layout
     VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
     b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
     b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
@@ -593,11 +612,10 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     }
     vkCmdEndRenderPass(cmd);
   }
-  clock.mark("gbuffer");
   imageBarrier(cmd, color.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
                VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 3, sets, 0, nullptr);
+  clock.end("gbuffer");
   ComputePush push{};
   push.size[0] = int32_t(width);
   push.size[1] = int32_t(height);
@@ -616,32 +634,34 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   const VkPipelineStageFlags anyStage = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT |
                                         VK_PIPELINE_STAGE_TRANSFER_BIT |
                                         VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-  auto dispatch = [&](VkPipeline pipeline, const char* pass) {
+  auto dispatch = [&](VkPipeline pipeline, const char* pass, const ComputePush& p, uint32_t groupsX,
+                      uint32_t groupsY) {
+    cmd = clock.begin();
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 3, sets, 0, nullptr);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
-    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    vkCmdDispatch(cmd, groupsX, groupsY, 1);
     memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, anyStage, VK_ACCESS_SHADER_WRITE_BIT, anyAccess);
-    clock.mark(pass);
+    clock.end(pass);
   };
+  const uint32_t groupsX = (width + 7) / 8, groupsY = (height + 7) / 8;
   if (lightingPipeline != VK_NULL_HANDLE) {
     // Warm-up: one workgroup (pixel 0,0 only). lavapipe JIT-compiles a pipeline at its first dispatch; this
     // keeps that compile out of the timed full-screen pass of a single frame.
     ComputePush warmup = push;
     warmup.size[0] = warmup.size[1] = 1;
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, lightingPipeline);
-    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(warmup), &warmup);
-    vkCmdDispatch(cmd, 1, 1, 1);
-    memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                  VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_SHADER_WRITE_BIT);
-    clock.mark("lighting_warmup");
-    dispatch(lightingPipeline, "lighting");
+    dispatch(lightingPipeline, "lighting_warmup", warmup, 1, 1);
+    dispatch(lightingPipeline, "lighting", push, groupsX, groupsY);
   }
-  if (directPipeline != VK_NULL_HANDLE) dispatch(directPipeline, "direct");
+  if (directPipeline != VK_NULL_HANDLE) dispatch(directPipeline, "direct", push, groupsX, groupsY);
   if (debugPipeline != VK_NULL_HANDLE)
-    dispatch(debugPipeline, mode == RenderMode::kProbes ? "surface"
-                            : mode == RenderMode::kTets ? "tets"
-                                                        : "occlusion");
+    dispatch(debugPipeline,
+             mode == RenderMode::kProbes ? "surface"
+             : mode == RenderMode::kTets ? "tets"
+                                         : "occlusion",
+             push, groupsX, groupsY);
   if (dots) {
+    cmd = clock.begin();
     VkRenderPassBeginInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
     info.renderPass = overlayPass;
     info.framebuffer = overlayFramebuffer;
@@ -663,12 +683,12 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       vkCmdDraw(cmd, 6, probeCount, 0, 0);
     }
     vkCmdEndRenderPass(cmd);
-    clock.mark("probe_dots");
+    clock.end("probe_dots");
   }
-  vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
 
   // Read back all four images after the last frame.
   const VkCommandBuffer copyCmd = allocateCommandBuffer(ctx, cleanup);
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   vkCheck(vkBeginCommandBuffer(copyCmd, &begin), "vkBeginCommandBuffer (readback)");
   for (int i = 0; i < kImageCount; ++i) {
@@ -692,15 +712,16 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   std::vector<std::vector<double>> samples(passCount);
   const int frames = options.warmupFrames + options.timedFrames;
   for (int f = 0; f < frames; ++f) {
-    submitAndWait(ctx, cmd, fence);
+    for (VkCommandBuffer pass : clock.buffers()) submitAndWait(ctx, pass, fence);
     if (queryPool == VK_NULL_HANDLE || f < options.warmupFrames) continue;
     uint64_t ticks[kMaxTimestamps] = {};
-    if (vkGetQueryPoolResults(device, queryPool, 0, uint32_t(passCount + 1), sizeof(ticks), ticks,
+    if (vkGetQueryPoolResults(device, queryPool, 0, uint32_t(2 * passCount), sizeof(ticks), ticks,
                               sizeof(uint64_t),
                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) != VK_SUCCESS)
       continue;
     const double msPerTick = ctx.timestampPeriodNs() * 1e-6;
-    for (size_t p = 0; p < passCount; ++p) samples[p].push_back(double(ticks[p + 1] - ticks[p]) * msPerTick);
+    for (size_t p = 0; p < passCount; ++p)
+      samples[p].push_back(double(ticks[2 * p + 1] - ticks[2 * p]) * msPerTick);
   }
   submitAndWait(ctx, copyCmd, fence);
 

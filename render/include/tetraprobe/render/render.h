@@ -100,10 +100,11 @@ struct PassTiming {
 };
 
 // Wall-clock and GPU times of one renderLevel call, milliseconds. GPU times come from timestamp queries (0
-// when the queue has none). lavapipe JIT-compiles shaders at the first draw/dispatch and runs dispatches
-// asynchronously (timestamps are taken after barriers): gbufferMs includes that compile; the lighting pass is
-// preceded by a one-workgroup warm-up dispatch so lightingMs does not (the compile lands in
-// lightingWarmupMs).
+// when the queue has none), taken around each pass in a command buffer of its own (lavapipe runs dispatches
+// asynchronously and does not order a timestamp between two passes of one command buffer after the first's
+// work). lavapipe JIT-compiles shaders at the first draw/dispatch: in a single frame gbufferMs includes that
+// compile; the lighting pass is preceded by a one-workgroup warm-up dispatch so lightingMs does not (the
+// compile lands in lightingWarmupMs). With warm-up frames neither carries it.
 struct RenderTimings {
   double totalMs = 0;           // whole call: device, upload, pipelines, render, readback, object cleanup
   double gbufferMs = 0;         // GPU: G-buffer render pass
