@@ -1,5 +1,6 @@
 # tetraprobe front door. The README's two commands:
-#   make demo   set up, build (Release), bake the bundled sample, render out/demo.png, evaluate
+#   make demo   set up, build (Release), bake the bundled sample, render out/demo.png (full) and
+#               out/demo_indirect.png, evaluate
 #   make test   set up, build, run the whole test suite through ctest
 BUILD_DIR ?= build
 BUILD_TYPE ?= Release
@@ -24,7 +25,8 @@ build: configure
 demo: build
 	@mkdir -p out
 	$(TP) bake $(SAMPLE) --spacing 0.5 -o out/two_rooms.tpb --report out/bake_report.json
-	$(TP) render $(SAMPLE) out/two_rooms.tpb -o out/demo.png --camera overview --mode indirect
+	$(TP) render $(SAMPLE) out/two_rooms.tpb -o out/demo.png --camera overview --mode full
+	$(TP) render $(SAMPLE) out/two_rooms.tpb -o out/demo_indirect.png --camera overview --mode indirect
 	$(TP) eval $(SAMPLE) out/two_rooms.tpb --report out/eval_report.json
 
 test: build

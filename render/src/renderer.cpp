@@ -1,6 +1,7 @@
-// Headless renderer: rasterizes a mesh into a G-buffer (local position, flat normal, albedo; RGBA32F +
-// depth), lights each pixel in a compute pass through shaders/tetraprobe.glsl, and reads all four images
-// back.
+// Headless renderer: per frame, optional shadow maps (full mode), a G-buffer raster (local position, flat
+// normal, albedo, emission; RGBA32F + depth), then the mode's full-screen compute passes (the probe lookup
+// through shaders/tetraprobe.glsl, direct light, or a debug view) and for the probe view a dot raster;
+// timestamps after every pass; the frame resubmitted for warm-up and timing; the images read back.
 #include "tetraprobe/render/render.h"
 
 #include <algorithm>
@@ -16,10 +17,14 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
 
-#include "gbuffer.frag.h"
-#include "gbuffer.vert.h"
+#include "debug_occlusion.comp.h"
+#include "debug_surface.comp.h"
+#include "debug_tets.comp.h"
+#include "direct.comp.h"
 #include "lighting.comp.h"
 #include "lighting_grid.comp.h"
+#include "pipelines.h"
+#include "shadow_lights.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
 #include "vulkan_context.h"
 
@@ -29,27 +34,32 @@ namespace {
 using render_detail::CleanupStack;
 using render_detail::GpuBuffer;
 using render_detail::GpuImage;
+using render_detail::kDepthFormat;
+using render_detail::kGbufferFormat;
+using render_detail::Vertex;
 using render_detail::vkCheck;
 using render_detail::VulkanContext;
 
-constexpr VkFormat kGbufferFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-constexpr int kImageCount = 4;           // color, position, normal, albedo (readback order)
-constexpr uint32_t kTimestampCount = 4;  // frame start, G-buffer done, warm-up done, lighting done
+constexpr int kImageCount = 4;           // read back: color, position, normal, albedo
+constexpr uint32_t kMaxTimestamps = 16;  // two per pass
 
-// One triangle-soup vertex, as gbuffer.vert reads it (locations 0, 1, 2).
-struct Vertex {
-  glm::vec3 position;  // level local frame
-  glm::vec3 normal;    // the triangle's unit normal
-  glm::vec3 albedo;
-};
-static_assert(sizeof(Vertex) == 36, "gbuffer.vert vertex stride");
-
-struct LightingPush {
+// Push constants of every compute pass (lighting.comp reads the first 12 bytes).
+struct ComputePush {
   int32_t size[2];
-  int32_t mode;
+  int32_t mode;         // lighting.comp: 0 irradiance, 1 albedo * E / pi
+  int32_t lightCount;   // direct.comp
+  float eye[4];         // debug views: camera position (local frame), w = radians per pixel
+  float shadowInfo[4];  // direct.comp: texels per shadow-map side, the sun box's half-width (metres)
 };
-static_assert(sizeof(LightingPush) == 12, "lighting.comp push constants");
+static_assert(sizeof(ComputePush) == 48, "the compute shaders' push constant block");
+
+struct DotsPush {
+  glm::mat4 viewProj;
+  float radius[2];  // NDC units
+  float brightness;
+  float pad;
+};
+static_assert(sizeof(DotsPush) == 80, "probe_dots.vert push constants");
 
 // Expands the indexed mesh into a soup in the local frame (world - origin in double), with flat normals
 // computed in double from the world positions.
@@ -72,171 +82,14 @@ std::vector<Vertex> buildSoup(const RenderMesh& mesh, const glm::dvec3& origin, 
     if (!(len > 0.0) || !std::isfinite(len)) continue;  // degenerate or non-finite: covers no pixel
     const glm::vec3 n(cr / len);
     const glm::vec3 albedo = t < mesh.triangleAlbedo.size() ? mesh.triangleAlbedo[t] : glm::vec3(0.8f);
+    const glm::vec3 emission = t < mesh.triangleEmission.size() ? mesh.triangleEmission[t] : glm::vec3(0.0f);
     for (const glm::dvec3& p : {a, b, c}) {
-      soup.push_back({glm::vec3(p - origin), n, albedo});
+      soup.push_back({glm::vec3(p - origin), n, albedo, emission});
       *lo = glm::min(*lo, p);
       *hi = glm::max(*hi, p);
     }
   }
   return soup;
-}
-
-VkShaderModule createShader(VkDevice device, const uint32_t* code, size_t bytes, CleanupStack& cleanup) {
-  VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-  info.codeSize = bytes;
-  info.pCode = code;
-  VkShaderModule module;
-  vkCheck(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
-  cleanup.push([device, module] { vkDestroyShaderModule(device, module, nullptr); });
-  return module;
-}
-
-VkRenderPass createRenderPass(VkDevice device, CleanupStack& cleanup) {
-  VkAttachmentDescription att[4] = {};
-  for (int i = 0; i < 3; ++i) {
-    att[i].format = kGbufferFormat;
-    att[i].samples = VK_SAMPLE_COUNT_1_BIT;
-    att[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    att[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    att[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-    att[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-    att[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    att[i].finalLayout = VK_IMAGE_LAYOUT_GENERAL;  // read by the compute pass, then copied
-  }
-  att[3].format = kDepthFormat;
-  att[3].samples = VK_SAMPLE_COUNT_1_BIT;
-  att[3].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-  att[3].storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-  att[3].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-  att[3].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-  att[3].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  att[3].finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  VkAttachmentReference colorRefs[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                        {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                        {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-  VkAttachmentReference depthRef{3, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-  VkSubpassDescription subpass{};
-  subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-  subpass.colorAttachmentCount = 3;
-  subpass.pColorAttachments = colorRefs;
-  subpass.pDepthStencilAttachment = &depthRef;
-  // The G-buffer writes become visible to the lighting pass (image loads) and to the readback copies.
-  VkSubpassDependency dep{};
-  dep.srcSubpass = 0;
-  dep.dstSubpass = VK_SUBPASS_EXTERNAL;
-  dep.srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-  dep.dstStageMask = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
-  dep.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-  dep.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
-  VkRenderPassCreateInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-  info.attachmentCount = 4;
-  info.pAttachments = att;
-  info.subpassCount = 1;
-  info.pSubpasses = &subpass;
-  info.dependencyCount = 1;
-  info.pDependencies = &dep;
-  VkRenderPass pass;
-  vkCheck(vkCreateRenderPass(device, &info, nullptr, &pass), "vkCreateRenderPass");
-  cleanup.push([device, pass] { vkDestroyRenderPass(device, pass, nullptr); });
-  return pass;
-}
-
-VkPipeline createGbufferPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, uint32_t width,
-                                 uint32_t height, CleanupStack& cleanup) {
-  const VkShaderModule vert = createShader(device, kSpirv_gbuffer_vert, sizeof(kSpirv_gbuffer_vert), cleanup);
-  const VkShaderModule frag = createShader(device, kSpirv_gbuffer_frag, sizeof(kSpirv_gbuffer_frag), cleanup);
-  VkPipelineShaderStageCreateInfo stages[2] = {};
-  stages[0].sType = stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-  stages[0].module = vert;
-  stages[0].pName = "main";
-  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-  stages[1].module = frag;
-  stages[1].pName = "main";
-
-  const VkVertexInputBindingDescription binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
-  const VkVertexInputAttributeDescription attrs[3] = {
-      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
-      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
-      {2, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, albedo)}};
-  VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-  vertexInput.vertexBindingDescriptionCount = 1;
-  vertexInput.pVertexBindingDescriptions = &binding;
-  vertexInput.vertexAttributeDescriptionCount = 3;
-  vertexInput.pVertexAttributeDescriptions = attrs;
-  VkPipelineInputAssemblyStateCreateInfo assembly{
-      VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-  assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
-  const VkViewport viewport{0, 0, float(width), float(height), 0, 1};
-  const VkRect2D scissor{{0, 0}, {width, height}};
-  VkPipelineViewportStateCreateInfo viewportState{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-  viewportState.viewportCount = 1;
-  viewportState.pViewports = &viewport;
-  viewportState.scissorCount = 1;
-  viewportState.pScissors = &scissor;
-  // The projection flips y (row 0 = top), so counter-clockwise as seen by the viewer stays counter-clockwise.
-  VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-  raster.polygonMode = VK_POLYGON_MODE_FILL;
-  raster.cullMode = VK_CULL_MODE_BACK_BIT;
-  raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-  raster.lineWidth = 1.0f;
-  VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-  multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-  VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-  depth.depthTestEnable = VK_TRUE;
-  depth.depthWriteEnable = VK_TRUE;
-  depth.depthCompareOp = VK_COMPARE_OP_LESS;
-  VkPipelineColorBlendAttachmentState blendAtt[3] = {};
-  for (auto& b : blendAtt)
-    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                       VK_COLOR_COMPONENT_A_BIT;
-  VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  blend.attachmentCount = 3;
-  blend.pAttachments = blendAtt;
-
-  VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-  info.stageCount = 2;
-  info.pStages = stages;
-  info.pVertexInputState = &vertexInput;
-  info.pInputAssemblyState = &assembly;
-  info.pViewportState = &viewportState;
-  info.pRasterizationState = &raster;
-  info.pMultisampleState = &multisample;
-  info.pDepthStencilState = &depth;
-  info.pColorBlendState = &blend;
-  info.layout = layout;
-  info.renderPass = pass;
-  VkPipeline pipeline;
-  vkCheck(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline),
-          "vkCreateGraphicsPipelines");
-  cleanup.push([device, pipeline] { vkDestroyPipeline(device, pipeline, nullptr); });
-  return pipeline;
-}
-
-VkPipelineLayout createPipelineLayout(VkDevice device, const VkDescriptorSetLayout* sets, uint32_t setCount,
-                                      VkShaderStageFlags pushStages, uint32_t pushBytes,
-                                      CleanupStack& cleanup) {
-  const VkPushConstantRange push{pushStages, 0, pushBytes};
-  VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  info.setLayoutCount = setCount;
-  info.pSetLayouts = sets;
-  info.pushConstantRangeCount = 1;
-  info.pPushConstantRanges = &push;
-  VkPipelineLayout layout;
-  vkCheck(vkCreatePipelineLayout(device, &info, nullptr, &layout), "vkCreatePipelineLayout");
-  cleanup.push([device, layout] { vkDestroyPipelineLayout(device, layout, nullptr); });
-  return layout;
-}
-
-VkDescriptorSetLayout createSetLayout(VkDevice device, const VkDescriptorSetLayoutBinding* bindings,
-                                      uint32_t count, CleanupStack& cleanup) {
-  VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  info.bindingCount = count;
-  info.pBindings = bindings;
-  VkDescriptorSetLayout layout;
-  vkCheck(vkCreateDescriptorSetLayout(device, &info, nullptr, &layout), "vkCreateDescriptorSetLayout");
-  cleanup.push([device, layout] { vkDestroyDescriptorSetLayout(device, layout, nullptr); });
-  return layout;
 }
 
 void imageBarrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to, VkAccessFlags src,
@@ -281,10 +134,103 @@ struct GridHeader {
 };
 static_assert(sizeof(GridHeader) == 48, "lighting_grid.comp header: vec4 min, vec4 step, ivec4 dims");
 
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags srcStage, VkPipelineStageFlags dstStage,
+                   VkAccessFlags src, VkAccessFlags dst) {
+  VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  b.srcAccessMask = src;
+  b.dstAccessMask = dst;
+  vkCmdPipelineBarrier(cmd, srcStage, dstStage, 0, 1, &b, 0, nullptr, 0, nullptr);
+}
+
+void fillBuffer(VkDevice device, const GpuBuffer& buffer, const void* data, size_t bytes, const char* what) {
+  void* mapped;
+  vkCheck(vkMapMemory(device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped), what);
+  if (bytes > 0) std::memcpy(mapped, data, bytes);
+  vkUnmapMemory(device, buffer.memory);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+VkCommandBuffer allocateCommandBuffer(const VulkanContext& ctx, CleanupStack& cleanup) {
+  const VkDevice device = ctx.device();
+  VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  info.commandPool = ctx.commandPool();
+  info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  info.commandBufferCount = 1;
+  VkCommandBuffer cmd;
+  vkCheck(vkAllocateCommandBuffers(device, &info, &cmd), "vkAllocateCommandBuffers");
+  const VkCommandPool pool = ctx.commandPool();
+  cleanup.push([device, pool, cmd] { vkFreeCommandBuffers(device, pool, 1, &cmd); });
+  return cmd;
+}
+
+// A frame as one command buffer per pass, each between two timestamps: TOP_OF_PIPE before its commands and
+// BOTTOM_OF_PIPE after them and a closing barrier. One buffer per pass because lavapipe, which runs
+// dispatches asynchronously, does not order a timestamp between two passes of one command buffer after the
+// first pass's work (measured: two full-screen dispatches both landed before the timestamp written between
+// them); a submission boundary with a fence wait between passes does.
+class PassRecorder {
+ public:
+  PassRecorder(const VulkanContext& ctx, CleanupStack& cleanup, VkQueryPool pool)
+      : ctx_(ctx), cleanup_(cleanup), pool_(pool) {}
+  VkCommandBuffer begin() {
+    buffers_.push_back(allocateCommandBuffer(ctx_, cleanup_));
+    const VkCommandBuffer cmd = buffers_.back();
+    VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    vkCheck(vkBeginCommandBuffer(cmd, &info), "vkBeginCommandBuffer");
+    const auto q = uint32_t(2 * names_.size());
+    if (pool_ != VK_NULL_HANDLE) {
+      vkCmdResetQueryPool(cmd, pool_, q, 2);
+      vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool_, q);
+    }
+    return cmd;
+  }
+  void end(const char* pass) {
+    const VkCommandBuffer cmd = buffers_.back();
+    if (pool_ != VK_NULL_HANDLE)
+      vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, uint32_t(2 * names_.size() + 1));
+    vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+    names_.push_back(pass);
+  }
+  const std::vector<VkCommandBuffer>& buffers() const { return buffers_; }
+  const std::vector<std::string>& names() const { return names_; }
+
+ private:
+  const VulkanContext& ctx_;
+  CleanupStack& cleanup_;
+  VkQueryPool pool_;
+  std::vector<VkCommandBuffer> buffers_;
+  std::vector<std::string> names_;
+};
+
+// Submits `cmd` and waits for it. Waits before anything can throw, so the cleanup never destroys objects in
+// use.
+void submitAndWait(const VulkanContext& ctx, VkCommandBuffer cmd, VkFence fence) {
+  const VkDevice device = ctx.device();
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd;
+  vkCheck(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit");
+  const VkResult waited = vkWaitForFences(device, 1, &fence, VK_TRUE, std::numeric_limits<uint64_t>::max());
+  if (waited != VK_SUCCESS) vkDeviceWaitIdle(device);
+  vkCheck(waited, "vkWaitForFences");
+  vkCheck(vkResetFences(device, 1, &fence), "vkResetFences");
+}
+
+bool usesLighting(RenderMode m) {
+  return m == RenderMode::kIrradiance || m == RenderMode::kIndirect || m == RenderMode::kFull;
+}
+
 // The lighting pass reads either a level (tetraprobe.glsl, set 0 = the level's buffers) or a grid
 // (lighting_grid.comp, set 0 binding 0 = one buffer).
 RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const Level* level,
-                        const ProbeQuery* query, const RenderGrid* grid, const RenderView& view) {
+                        const ProbeQuery* query, const RenderGrid* grid, const RenderView& view,
+                        const RenderOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (view.width <= 0 || view.height <= 0 || view.width > 16384 || view.height > 16384)
     throw std::runtime_error("render: image size " + std::to_string(view.width) + "x" +
@@ -293,11 +239,23 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     throw std::runtime_error("render: fovYDeg must be in (0, 180)");
   if (glm::length(glm::cross(view.target - view.eye, view.up)) == 0.0f)
     throw std::runtime_error("render: eye, target and up must not be collinear");
+  if (!level && !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect))
+    throw std::runtime_error("render: a grid renders irradiance or indirect only");
+  if (options.shadowMapSize < 16 || options.shadowMapSize > 8192)
+    throw std::runtime_error("render: shadowMapSize must be in 16..8192");
+  if (options.warmupFrames < 0 || options.timedFrames < 1 ||
+      options.warmupFrames + options.timedFrames > 1000)
+    throw std::runtime_error("render: need warmupFrames >= 0, timedFrames >= 1 and at most 1000 frames");
   const uint32_t width = uint32_t(view.width), height = uint32_t(view.height);
+  const RenderMode mode = view.mode;
 
   glm::dvec3 lo, hi;
   const std::vector<Vertex> soup = buildSoup(mesh, origin, &lo, &hi);
   const glm::mat4 viewProj = viewProjection(view, origin, lo, hi);
+  if (soup.empty()) lo = hi = origin;
+  const render_detail::ShadowLights shadow =
+      mode == RenderMode::kFull ? render_detail::packShadowLights(options.lights, origin, lo, hi)
+                                : render_detail::ShadowLights{};
 
   VulkanContext ctx;
   const VkDevice device = ctx.device();
@@ -332,118 +290,236 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     vkUnmapMemory(device, gridBuffer.memory);
   }
 
-  const VkDeviceSize vertexBytes = std::max<VkDeviceSize>(sizeof(Vertex), soup.size() * sizeof(Vertex));
   const GpuBuffer vertices =
-      ctx.createBuffer(vertexBytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, hostMem, cleanup);
-  {
-    void* mapped;
-    vkCheck(vkMapMemory(device, vertices.memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (vertices)");
-    if (!soup.empty()) std::memcpy(mapped, soup.data(), soup.size() * sizeof(Vertex));
-    vkUnmapMemory(device, vertices.memory);
-  }
+      ctx.createBuffer(std::max<VkDeviceSize>(sizeof(Vertex), soup.size() * sizeof(Vertex)),
+                       VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, hostMem, cleanup);
+  fillBuffer(device, vertices, soup.data(), soup.size() * sizeof(Vertex), "vkMapMemory (vertices)");
 
-  // Images: 0 color (lighting output), 1 position, 2 normal, 3 albedo; plus depth.
+  // Images: the output colour, the G-buffer (position, normal, albedo, emission) and depth.
   const VkImageUsageFlags gbufUsage =
       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  GpuImage images[kImageCount];
-  images[0] = ctx.createImage(width, height, kGbufferFormat,
-                              VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                              VK_IMAGE_ASPECT_COLOR_BIT, cleanup);
-  for (int i = 1; i < kImageCount; ++i)
-    images[i] = ctx.createImage(width, height, kGbufferFormat, gbufUsage, VK_IMAGE_ASPECT_COLOR_BIT, cleanup);
+  const VkImageAspectFlags colorAspect = VK_IMAGE_ASPECT_COLOR_BIT;
+  const GpuImage color = ctx.createImage(width, height, kGbufferFormat, gbufUsage, colorAspect, cleanup);
+  const GpuImage gPosition = ctx.createImage(width, height, kGbufferFormat, gbufUsage, colorAspect, cleanup);
+  const GpuImage gNormal = ctx.createImage(width, height, kGbufferFormat, gbufUsage, colorAspect, cleanup);
+  const GpuImage gAlbedo = ctx.createImage(width, height, kGbufferFormat, gbufUsage, colorAspect, cleanup);
+  const GpuImage gEmission = ctx.createImage(width, height, kGbufferFormat, gbufUsage, colorAspect, cleanup);
   const GpuImage depth =
       ctx.createImage(width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                       VK_IMAGE_ASPECT_DEPTH_BIT, cleanup);
+  const GpuImage* readImages[kImageCount] = {&color, &gPosition, &gNormal, &gAlbedo};
   const VkDeviceSize imageBytes = VkDeviceSize(width) * height * 4 * sizeof(float);
   GpuBuffer readback[kImageCount];
   for (auto& b : readback)
     b = ctx.createBuffer(imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hostMem, cleanup);
 
   // G-buffer pass.
-  const VkRenderPass renderPass = createRenderPass(device, cleanup);
-  VkFramebuffer framebuffer;
+  const VkRenderPass gbufferPass = render_detail::createGbufferPass(device, cleanup);
+  VkFramebuffer gbufferFramebuffer;
   {
-    const VkImageView views[4] = {images[1].view, images[2].view, images[3].view, depth.view};
+    const VkImageView views[5] = {gPosition.view, gNormal.view, gAlbedo.view, gEmission.view, depth.view};
     VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    info.renderPass = renderPass;
-    info.attachmentCount = 4;
+    info.renderPass = gbufferPass;
+    info.attachmentCount = 5;
     info.pAttachments = views;
     info.width = width;
     info.height = height;
     info.layers = 1;
-    vkCheck(vkCreateFramebuffer(device, &info, nullptr, &framebuffer), "vkCreateFramebuffer");
-    cleanup.push([device, framebuffer] { vkDestroyFramebuffer(device, framebuffer, nullptr); });
+    vkCheck(vkCreateFramebuffer(device, &info, nullptr, &gbufferFramebuffer), "vkCreateFramebuffer");
+    cleanup.push([device, gbufferFramebuffer] { vkDestroyFramebuffer(device, gbufferFramebuffer, nullptr); });
   }
-  const VkPipelineLayout gbufferLayout =
-      createPipelineLayout(device, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, sizeof(glm::mat4), cleanup);
+  const VkPipelineLayout gbufferLayout = render_detail::createPipelineLayout(
+      device, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, sizeof(glm::mat4), cleanup);
   const VkPipeline gbufferPipeline =
-      createGbufferPipeline(device, renderPass, gbufferLayout, width, height, cleanup);
+      render_detail::createGbufferPipeline(device, gbufferPass, gbufferLayout, width, height, cleanup);
 
-  // Lighting pass: set 0 = the level (vulkan_upload.h), set 1 = the G-buffer and output images.
+  // Shadow maps (full mode): one depth layer per cube face or sun; a 1x1 stand-in when there are none.
+  const uint32_t shadowLayers = uint32_t(std::max<size_t>(1, shadow.layers.size()));
+  const uint32_t shadowSize = shadow.layers.empty() ? 1u : uint32_t(options.shadowMapSize);
+  GpuImage shadowImage;
+  VkRenderPass shadowPass = VK_NULL_HANDLE;
+  VkPipelineLayout shadowLayout = VK_NULL_HANDLE;
+  VkPipeline shadowPipeline = VK_NULL_HANDLE;
+  std::vector<VkFramebuffer> shadowFramebuffers;
+  VkSampler shadowSampler = VK_NULL_HANDLE;
+  if (mode == RenderMode::kFull) {
+    shadowImage = ctx.createImage(shadowSize, shadowSize, kDepthFormat,
+                                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                  VK_IMAGE_ASPECT_DEPTH_BIT, cleanup, shadowLayers);
+    if (shadowLayers == 1) {  // direct.comp reads a 2D array view
+      VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+      vci.image = shadowImage.image;
+      vci.viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY;
+      vci.format = kDepthFormat;
+      vci.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+      vkCheck(vkCreateImageView(device, &vci, nullptr, &shadowImage.view), "vkCreateImageView (shadow)");
+      const VkImageView v = shadowImage.view;
+      cleanup.push([device, v] { vkDestroyImageView(device, v, nullptr); });
+    }
+    VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    si.magFilter = si.minFilter = VK_FILTER_LINEAR;
+    si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    si.compareEnable = VK_TRUE;
+    si.compareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
+    si.maxLod = 0.0f;
+    vkCheck(vkCreateSampler(device, &si, nullptr, &shadowSampler), "vkCreateSampler");
+    cleanup.push([device, shadowSampler] { vkDestroySampler(device, shadowSampler, nullptr); });
+    if (!shadow.layers.empty()) {
+      shadowPass = render_detail::createShadowPass(device, cleanup);
+      shadowLayout = render_detail::createPipelineLayout(device, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT,
+                                                         sizeof(glm::mat4), cleanup);
+      shadowPipeline =
+          render_detail::createShadowPipeline(device, shadowPass, shadowLayout, shadowSize, cleanup);
+      for (uint32_t layer = 0; layer < shadowLayers; ++layer) {
+        const VkImageView view1 =
+            ctx.createLayerView(shadowImage.image, kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT, layer, cleanup);
+        VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        info.renderPass = shadowPass;
+        info.attachmentCount = 1;
+        info.pAttachments = &view1;
+        info.width = info.height = shadowSize;
+        info.layers = 1;
+        VkFramebuffer fb;
+        vkCheck(vkCreateFramebuffer(device, &info, nullptr, &fb), "vkCreateFramebuffer (shadow)");
+        cleanup.push([device, fb] { vkDestroyFramebuffer(device, fb, nullptr); });
+        shadowFramebuffers.push_back(fb);
+      }
+    }
+  }
+  const GpuBuffer lightBuffer =
+      ctx.createBuffer(std::max<size_t>(1, shadow.lights.size()) * sizeof(render_detail::GpuLight),
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
+  fillBuffer(device, lightBuffer, shadow.lights.data(),
+             shadow.lights.size() * sizeof(render_detail::GpuLight), "vkMapMemory (lights)");
+  const GpuBuffer matrixBuffer = ctx.createBuffer(shadowLayers * sizeof(glm::mat4),
+                                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
+  fillBuffer(device, matrixBuffer, shadow.layers.data(), shadow.layers.size() * sizeof(glm::mat4),
+             "vkMapMemory (shadow matrices)");
+
+  // Compute passes: set 0 = the level (vulkan_upload.h) or the grid, set 1 = the images (0 position,
+  // 1 normal, 2 albedo, 3 colour, 4 emission), set 2 = direct light (lights, layer matrices, shadow maps).
   VkDescriptorSetLayoutBinding levelBindings[kGpuBindingCount];
   levelDescriptorBindings(VK_SHADER_STAGE_COMPUTE_BIT, 0, levelBindings);
   const uint32_t levelBindingCount = level ? uint32_t(kGpuBindingCount) : 1u;  // the grid: binding 0 only
-  VkDescriptorSetLayoutBinding imageBindings[4];
-  for (uint32_t i = 0; i < 4; ++i)
+  VkDescriptorSetLayoutBinding imageBindings[5];
+  for (uint32_t i = 0; i < 5; ++i)
     imageBindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
-  const VkDescriptorSetLayout setLayouts[2] = {
-      createSetLayout(device, levelBindings, levelBindingCount, cleanup),
-      createSetLayout(device, imageBindings, 4, cleanup)};
-  const VkPipelineLayout lightingLayout =
-      createPipelineLayout(device, setLayouts, 2, VK_SHADER_STAGE_COMPUTE_BIT, sizeof(LightingPush), cleanup);
-  VkPipeline lightingPipeline;
-  {
-    const VkShaderModule comp =
-        level ? createShader(device, kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp), cleanup)
-              : createShader(device, kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp), cleanup);
-    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    info.stage.module = comp;
-    info.stage.pName = "main";
-    info.layout = lightingLayout;
-    vkCheck(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &lightingPipeline),
-            "vkCreateComputePipelines");
-    cleanup.push([device, lightingPipeline] { vkDestroyPipeline(device, lightingPipeline, nullptr); });
+  const VkDescriptorSetLayoutBinding directBindings[3] = {
+      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
+  const bool full = mode == RenderMode::kFull;
+  const VkDescriptorSetLayout setLayouts[3] = {
+      render_detail::createSetLayout(device, levelBindings, levelBindingCount, cleanup),
+      render_detail::createSetLayout(device, imageBindings, 5, cleanup),
+      render_detail::createSetLayout(device, directBindings, full ? 3u : 0u, cleanup)};
+  const VkPipelineLayout computeLayout = render_detail::createPipelineLayout(
+      device, setLayouts, 3, VK_SHADER_STAGE_COMPUTE_BIT, sizeof(ComputePush), cleanup);
+  auto compute = [&](const uint32_t* code, size_t bytes) {
+    return render_detail::createComputePipeline(device, computeLayout, code, bytes, cleanup);
+  };
+  VkPipeline lightingPipeline = VK_NULL_HANDLE, directPipeline = VK_NULL_HANDLE,
+             debugPipeline = VK_NULL_HANDLE;
+  if (usesLighting(mode))
+    lightingPipeline = level ? compute(kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp))
+                             : compute(kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp));
+  if (full) directPipeline = compute(kSpirv_direct_comp, sizeof(kSpirv_direct_comp));
+  if (mode == RenderMode::kProbes)
+    debugPipeline = compute(kSpirv_debug_surface_comp, sizeof(kSpirv_debug_surface_comp));
+  if (mode == RenderMode::kTets)
+    debugPipeline = compute(kSpirv_debug_tets_comp, sizeof(kSpirv_debug_tets_comp));
+  if (mode == RenderMode::kOcclusion)
+    debugPipeline = compute(kSpirv_debug_occlusion_comp, sizeof(kSpirv_debug_occlusion_comp));
+
+  // Probe dots (probes mode): a buffer of (local position, kind), the overlay pass and its two pipelines.
+  const bool dots = mode == RenderMode::kProbes;
+  GpuBuffer probeBuffer;
+  VkRenderPass overlayPass = VK_NULL_HANDLE;
+  VkFramebuffer overlayFramebuffer = VK_NULL_HANDLE;
+  VkDescriptorSetLayout dotsSetLayout = VK_NULL_HANDLE;
+  VkPipelineLayout dotsLayout = VK_NULL_HANDLE;
+  VkPipeline dotsVisible = VK_NULL_HANDLE, dotsHidden = VK_NULL_HANDLE;
+  const uint32_t probeCount = level ? uint32_t(level->probes.size()) : 0u;
+  if (dots) {
+    std::vector<glm::vec4> probes;
+    probes.reserve(probeCount);
+    for (uint32_t i = 0; i < probeCount; ++i)
+      probes.emplace_back(level->probes[i],
+                          i < level->probeKinds.size() ? float(uint8_t(level->probeKinds[i])) : -1.0f);
+    probeBuffer = ctx.createBuffer(std::max<size_t>(1, probes.size()) * sizeof(glm::vec4),
+                                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
+    fillBuffer(device, probeBuffer, probes.data(), probes.size() * sizeof(glm::vec4), "vkMapMemory (probes)");
+    overlayPass = render_detail::createOverlayPass(device, cleanup);
+    const VkImageView views[2] = {color.view, depth.view};
+    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    info.renderPass = overlayPass;
+    info.attachmentCount = 2;
+    info.pAttachments = views;
+    info.width = width;
+    info.height = height;
+    info.layers = 1;
+    vkCheck(vkCreateFramebuffer(device, &info, nullptr, &overlayFramebuffer), "vkCreateFramebuffer (dots)");
+    cleanup.push([device, overlayFramebuffer] { vkDestroyFramebuffer(device, overlayFramebuffer, nullptr); });
+    const VkDescriptorSetLayoutBinding b{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT,
+                                         nullptr};
+    dotsSetLayout = render_detail::createSetLayout(device, &b, 1, cleanup);
+    dotsLayout = render_detail::createPipelineLayout(device, &dotsSetLayout, 1, VK_SHADER_STAGE_VERTEX_BIT,
+                                                     sizeof(DotsPush), cleanup);
+    dotsHidden = render_detail::createDotsPipeline(device, overlayPass, dotsLayout, width, height,
+                                                   VK_COMPARE_OP_GREATER, cleanup);
+    dotsVisible = render_detail::createDotsPipeline(device, overlayPass, dotsLayout, width, height,
+                                                    VK_COMPARE_OP_LESS_OR_EQUAL, cleanup);
   }
+
   VkDescriptorPool descriptorPool;
   {
-    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount},
-                                           {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 4}};
+    const VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 3},
+                                           {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 5},
+                                           {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    info.maxSets = 2;
-    info.poolSizeCount = 2;
+    info.maxSets = 4;
+    info.poolSizeCount = 3;
     info.pPoolSizes = sizes;
     vkCheck(vkCreateDescriptorPool(device, &info, nullptr, &descriptorPool), "vkCreateDescriptorPool");
     cleanup.push([device, descriptorPool] { vkDestroyDescriptorPool(device, descriptorPool, nullptr); });
   }
-  VkDescriptorSet sets[2];
+  VkDescriptorSet sets[3];
   {
     VkDescriptorSetAllocateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     info.descriptorPool = descriptorPool;
-    info.descriptorSetCount = 2;
+    info.descriptorSetCount = 3;
     info.pSetLayouts = setLayouts;
     vkCheck(vkAllocateDescriptorSets(device, &info, sets), "vkAllocateDescriptorSets");
   }
-  if (level) {
-    writeLevelDescriptors(device, sets[0], 0, levelBuffers);
-  } else {
-    const VkDescriptorBufferInfo info{gridBuffer.buffer, 0, VK_WHOLE_SIZE};
+  VkDescriptorSet dotsSet = VK_NULL_HANDLE;
+  if (dots) {
+    VkDescriptorSetAllocateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    info.descriptorPool = descriptorPool;
+    info.descriptorSetCount = 1;
+    info.pSetLayouts = &dotsSetLayout;
+    vkCheck(vkAllocateDescriptorSets(device, &info, &dotsSet), "vkAllocateDescriptorSets (dots)");
+  }
+  auto writeBuffer = [&](VkDescriptorSet set, uint32_t binding, VkBuffer buffer) {
+    const VkDescriptorBufferInfo info{buffer, 0, VK_WHOLE_SIZE};
     VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    write.dstSet = sets[0];
-    write.dstBinding = 0;
+    write.dstSet = set;
+    write.dstBinding = binding;
     write.descriptorCount = 1;
     write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     write.pBufferInfo = &info;
     vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
-  }
+  };
+  if (level)
+    writeLevelDescriptors(device, sets[0], 0, levelBuffers);
+  else
+    writeBuffer(sets[0], 0, gridBuffer.buffer);
   {
-    // Bindings 0..2 = position, normal, albedo; 3 = output color.
-    const int order[4] = {1, 2, 3, 0};
-    VkDescriptorImageInfo infos[4];
-    VkWriteDescriptorSet writes[4];
-    for (uint32_t i = 0; i < 4; ++i) {
-      infos[i] = {VK_NULL_HANDLE, images[order[i]].view, VK_IMAGE_LAYOUT_GENERAL};
+    const GpuImage* bound[5] = {&gPosition, &gNormal, &gAlbedo, &color, &gEmission};
+    VkDescriptorImageInfo infos[5];
+    VkWriteDescriptorSet writes[5];
+    for (uint32_t i = 0; i < 5; ++i) {
+      infos[i] = {VK_NULL_HANDLE, bound[i]->view, VK_IMAGE_LAYOUT_GENERAL};
       writes[i] = VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       writes[i].dstSet = sets[1];
       writes[i].dstBinding = i;
@@ -451,45 +527,80 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       writes[i].pImageInfo = &infos[i];
     }
-    vkUpdateDescriptorSets(device, 4, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, 5, writes, 0, nullptr);
   }
+  if (full) {
+    writeBuffer(sets[2], 0, lightBuffer.buffer);
+    writeBuffer(sets[2], 1, matrixBuffer.buffer);
+    const VkDescriptorImageInfo info{shadowSampler, shadowImage.view,
+                                     VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = sets[2];
+    write.dstBinding = 2;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    write.pImageInfo = &info;
+    vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+  }
+  if (dots) writeBuffer(dotsSet, 0, probeBuffer.buffer);
 
   VkQueryPool queryPool = VK_NULL_HANDLE;
-  const bool timestamps = ctx.timestampPeriodNs() > 0;
-  if (timestamps) {
+  if (ctx.timestampPeriodNs() > 0) {
     VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-    info.queryCount = kTimestampCount;
+    info.queryCount = kMaxTimestamps;
     vkCheck(vkCreateQueryPool(device, &info, nullptr, &queryPool), "vkCreateQueryPool");
     cleanup.push([device, queryPool] { vkDestroyQueryPool(device, queryPool, nullptr); });
   }
 
-  // Record: G-buffer pass, lighting dispatch, copies of all four images to host memory.
-  VkCommandBuffer cmd;
-  {
-    VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    info.commandPool = ctx.commandPool();
-    info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    info.commandBufferCount = 1;
-    vkCheck(vkAllocateCommandBuffers(device, &info, &cmd), "vkAllocateCommandBuffers");
-    const VkCommandPool pool = ctx.commandPool();
-    cleanup.push([device, pool, cmd] { vkFreeCommandBuffers(device, pool, 1, &cmd); });
+  // Record one frame, a command buffer per pass; it is submitted warmupFrames + timedFrames times.
+  PassRecorder clock(ctx, cleanup, queryPool);
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  if (full && !shadowFramebuffers.empty()) {
+    cmd = clock.begin();
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, shadowPipeline);
+    const VkDeviceSize offset = 0;
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vertices.buffer, &offset);
+    for (size_t layer = 0; layer < shadowFramebuffers.size(); ++layer) {
+      VkClearValue clear{};
+      clear.depthStencil = {1.0f, 0};
+      VkRenderPassBeginInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+      info.renderPass = shadowPass;
+      info.framebuffer = shadowFramebuffers[layer];
+      info.renderArea = {{0, 0}, {shadowSize, shadowSize}};
+      info.clearValueCount = 1;
+      info.pClearValues = &clear;
+      vkCmdBeginRenderPass(cmd, &info, VK_SUBPASS_CONTENTS_INLINE);
+      if (!soup.empty()) {
+        vkCmdPushConstants(cmd, shadowLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(glm::mat4),
+                           &shadow.layers[layer]);
+        vkCmdDraw(cmd, uint32_t(soup.size()), 1, 0, 0);
+      }
+      vkCmdEndRenderPass(cmd);
+    }
+    clock.end("shadow_maps");
   }
-  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  vkCheck(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-  if (timestamps) {
-    vkCmdResetQueryPool(cmd, queryPool, 0, kTimestampCount);
-    vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queryPool, 0);
+  cmd = clock.begin();
+  if (full && shadowFramebuffers
+                  .empty()) {  // the stand-in layer, never read (no lights), still needs its sampled layout
+    VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    b.newLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = shadowImage.image;
+    b.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0,
+                         nullptr, 0, nullptr, 1, &b);
   }
   {
-    VkClearValue clears[4] = {};
-    clears[3].depthStencil = {1.0f, 0};
+    VkClearValue clears[5] = {};
+    clears[4].depthStencil = {1.0f, 0};
     VkRenderPassBeginInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    info.renderPass = renderPass;
-    info.framebuffer = framebuffer;
+    info.renderPass = gbufferPass;
+    info.framebuffer = gbufferFramebuffer;
     info.renderArea = {{0, 0}, {width, height}};
-    info.clearValueCount = 4;
+    info.clearValueCount = 5;
     info.pClearValues = clears;
     vkCmdBeginRenderPass(cmd, &info, VK_SUBPASS_CONTENTS_INLINE);
     if (!soup.empty()) {
@@ -501,44 +612,95 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     }
     vkCmdEndRenderPass(cmd);
   }
-  if (timestamps) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool, 1);
-  imageBarrier(cmd, images[0].image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
+  imageBarrier(cmd, color.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
                VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, lightingPipeline);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, lightingLayout, 0, 2, sets, 0, nullptr);
-  const int32_t mode = view.mode == RenderMode::kIndirect ? 1 : 0;
-  // Warm-up: one workgroup (pixel 0,0 only). lavapipe JIT-compiles a pipeline at its first dispatch; this
-  // keeps that compile out of the timed full-screen pass.
-  const LightingPush warmup{{1, 1}, mode};
-  vkCmdPushConstants(cmd, lightingLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(warmup), &warmup);
-  vkCmdDispatch(cmd, 1, 1, 1);
-  imageBarrier(cmd, images[0].image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
-               VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-               VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-  if (timestamps) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool, 2);
-  const LightingPush push{{int32_t(width), int32_t(height)}, mode};
-  vkCmdPushConstants(cmd, lightingLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-  vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
-  imageBarrier(cmd, images[0].image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
-               VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-               VK_PIPELINE_STAGE_TRANSFER_BIT);
-  // After the barrier: lavapipe runs dispatches asynchronously and only a barrier waits for them.
-  if (timestamps) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool, 3);
+  clock.end("gbuffer");
+  ComputePush push{};
+  push.size[0] = int32_t(width);
+  push.size[1] = int32_t(height);
+  push.mode = mode == RenderMode::kIrradiance ? 0 : 1;
+  push.lightCount = int32_t(shadow.lights.size());
+  const glm::vec3 eyeLocal(glm::dvec3(view.eye) - origin);
+  push.eye[0] = eyeLocal.x;
+  push.eye[1] = eyeLocal.y;
+  push.eye[2] = eyeLocal.z;
+  push.eye[3] = float(glm::radians(double(view.fovYDeg)) / double(height));
+  push.shadowInfo[0] = float(shadowSize);
+  push.shadowInfo[1] = shadow.sunHalfWidth;
+  const VkAccessFlags anyAccess = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                                  VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT |
+                                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+  const VkPipelineStageFlags anyStage = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT |
+                                        VK_PIPELINE_STAGE_TRANSFER_BIT |
+                                        VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+  auto dispatch = [&](VkPipeline pipeline, const char* pass, const ComputePush& p, uint32_t groupsX,
+                      uint32_t groupsY) {
+    cmd = clock.begin();
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 3, sets, 0, nullptr);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
+    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    vkCmdDispatch(cmd, groupsX, groupsY, 1);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, anyStage, VK_ACCESS_SHADER_WRITE_BIT, anyAccess);
+    clock.end(pass);
+  };
+  const uint32_t groupsX = (width + 7) / 8, groupsY = (height + 7) / 8;
+  if (lightingPipeline != VK_NULL_HANDLE) {
+    // Warm-up: one workgroup (pixel 0,0 only). lavapipe JIT-compiles a pipeline at its first dispatch; this
+    // keeps that compile out of the timed full-screen pass of a single frame.
+    ComputePush warmup = push;
+    warmup.size[0] = warmup.size[1] = 1;
+    dispatch(lightingPipeline, "lighting_warmup", warmup, 1, 1);
+    dispatch(lightingPipeline, "lighting", push, groupsX, groupsY);
+  }
+  if (directPipeline != VK_NULL_HANDLE) dispatch(directPipeline, "direct", push, groupsX, groupsY);
+  if (debugPipeline != VK_NULL_HANDLE)
+    dispatch(debugPipeline,
+             mode == RenderMode::kProbes ? "surface"
+             : mode == RenderMode::kTets ? "tets"
+                                         : "occlusion",
+             push, groupsX, groupsY);
+  if (dots) {
+    cmd = clock.begin();
+    VkRenderPassBeginInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    info.renderPass = overlayPass;
+    info.framebuffer = overlayFramebuffer;
+    info.renderArea = {{0, 0}, {width, height}};
+    vkCmdBeginRenderPass(cmd, &info, VK_SUBPASS_CONTENTS_INLINE);
+    if (probeCount > 0) {
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, dotsLayout, 0, 1, &dotsSet, 0, nullptr);
+      const float radiusPx = std::max(2.5f, float(height) / 110.0f);
+      DotsPush dp{viewProj, {2.0f * radiusPx / float(width), 2.0f * radiusPx / float(height)}, 1.0f, 0.0f};
+      DotsPush hidden = dp;
+      hidden.radius[0] *= 0.6f;
+      hidden.radius[1] *= 0.6f;
+      hidden.brightness = 0.35f;
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, dotsHidden);
+      vkCmdPushConstants(cmd, dotsLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(hidden), &hidden);
+      vkCmdDraw(cmd, 6, probeCount, 0, 0);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, dotsVisible);
+      vkCmdPushConstants(cmd, dotsLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(dp), &dp);
+      vkCmdDraw(cmd, 6, probeCount, 0, 0);
+    }
+    vkCmdEndRenderPass(cmd);
+    clock.end("probe_dots");
+  }
+
+  // Read back all four images after the last frame.
+  const VkCommandBuffer copyCmd = allocateCommandBuffer(ctx, cleanup);
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  vkCheck(vkBeginCommandBuffer(copyCmd, &begin), "vkBeginCommandBuffer (readback)");
   for (int i = 0; i < kImageCount; ++i) {
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {width, height, 1};
-    vkCmdCopyImageToBuffer(cmd, images[i].image, VK_IMAGE_LAYOUT_GENERAL, readback[i].buffer, 1, &region);
+    vkCmdCopyImageToBuffer(copyCmd, readImages[i]->image, VK_IMAGE_LAYOUT_GENERAL, readback[i].buffer, 1,
+                           &region);
   }
-  {
-    VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    b.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    b.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &b, 0,
-                         nullptr, 0, nullptr);
-  }
-  vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+  memoryBarrier(copyCmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_HOST_READ_BIT);
+  vkCheck(vkEndCommandBuffer(copyCmd), "vkEndCommandBuffer (readback)");
 
   VkFence fence;
   {
@@ -546,14 +708,22 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     vkCheck(vkCreateFence(device, &info, nullptr, &fence), "vkCreateFence");
     cleanup.push([device, fence] { vkDestroyFence(device, fence, nullptr); });
   }
-  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  submit.commandBufferCount = 1;
-  submit.pCommandBuffers = &cmd;
-  vkCheck(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit");
-  // Wait before anything can throw, so the cleanup never destroys objects in use.
-  const VkResult waited = vkWaitForFences(device, 1, &fence, VK_TRUE, std::numeric_limits<uint64_t>::max());
-  if (waited != VK_SUCCESS) vkDeviceWaitIdle(device);
-  vkCheck(waited, "vkWaitForFences");
+  const size_t passCount = clock.names().size();
+  std::vector<std::vector<double>> samples(passCount);
+  const int frames = options.warmupFrames + options.timedFrames;
+  for (int f = 0; f < frames; ++f) {
+    for (VkCommandBuffer pass : clock.buffers()) submitAndWait(ctx, pass, fence);
+    if (queryPool == VK_NULL_HANDLE || f < options.warmupFrames) continue;
+    uint64_t ticks[kMaxTimestamps] = {};
+    if (vkGetQueryPoolResults(device, queryPool, 0, uint32_t(2 * passCount), sizeof(ticks), ticks,
+                              sizeof(uint64_t),
+                              VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) != VK_SUCCESS)
+      continue;
+    const double msPerTick = ctx.timestampPeriodNs() * 1e-6;
+    for (size_t p = 0; p < passCount; ++p)
+      samples[p].push_back(double(ticks[2 * p + 1] - ticks[2 * p]) * msPerTick);
+  }
+  submitAndWait(ctx, copyCmd, fence);
 
   RenderResult result;
   Image* outs[kImageCount] = {&result.color, &result.position, &result.normal, &result.albedo};
@@ -567,34 +737,39 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     std::memcpy(img.rgba.data(), mapped, img.rgba.size() * sizeof(float));
     vkUnmapMemory(device, readback[i].memory);
   }
-  if (timestamps) {
-    uint64_t ticks[kTimestampCount] = {};
-    if (vkGetQueryPoolResults(device, queryPool, 0, kTimestampCount, sizeof(ticks), ticks, sizeof(uint64_t),
-                              VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
-      const double msPerTick = ctx.timestampPeriodNs() * 1e-6;
-      result.timings.gbufferMs = double(ticks[1] - ticks[0]) * msPerTick;
-      result.timings.lightingWarmupMs = double(ticks[2] - ticks[1]) * msPerTick;
-      result.timings.lightingMs = double(ticks[3] - ticks[2]) * msPerTick;
-    }
+  RenderTimings& t = result.timings;
+  t.warmupFrames = options.warmupFrames;
+  t.timedFrames = options.timedFrames;
+  for (size_t p = 0; p < passCount; ++p) {
+    if (samples[p].empty()) continue;
+    const double ms = median(samples[p]);
+    const std::string& name = clock.names()[p];
+    t.passes.push_back({name, ms});
+    if (name == "gbuffer") t.gbufferMs = ms;
+    if (name == "lighting_warmup") t.lightingWarmupMs = ms;
+    if (name == "lighting") t.lightingMs = ms;
   }
   cleanup.run();
-  result.timings.totalMs =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  t.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
 
 }  // namespace
 
+bool isDebugMode(RenderMode mode) {
+  return mode == RenderMode::kProbes || mode == RenderMode::kTets || mode == RenderMode::kOcclusion;
+}
+
 RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
-                         const RenderView& view) {
-  return renderImpl(mesh, level.origin, &level, &query, nullptr, view);
+                         const RenderView& view, const RenderOptions& options) {
+  return renderImpl(mesh, level.origin, &level, &query, nullptr, view, options);
 }
 
 RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, const RenderView& view) {
   if (grid.dims.x < 2 || grid.dims.y < 2 || grid.dims.z < 2 || !grid.sh || !(grid.step > 0.0))
     throw std::runtime_error("render: a grid needs at least 2 nodes per axis, a positive step and its SH");
   const glm::dvec3 centre = grid.min + glm::dvec3(grid.dims - 1) * grid.step * 0.5;
-  return renderImpl(mesh, glm::round(centre), nullptr, nullptr, &grid, view);
+  return renderImpl(mesh, glm::round(centre), nullptr, nullptr, &grid, view, RenderOptions{});
 }
 
 }  // namespace tetraprobe

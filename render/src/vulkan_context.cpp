@@ -193,14 +193,14 @@ GpuBuffer VulkanContext::createBuffer(VkDeviceSize size, VkBufferUsageFlags usag
 }
 
 GpuImage VulkanContext::createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
-                                    VkImageAspectFlags aspect, CleanupStack& cleanup) const {
+                                    VkImageAspectFlags aspect, CleanupStack& cleanup, uint32_t layers) const {
   GpuImage im;
   VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   info.imageType = VK_IMAGE_TYPE_2D;
   info.format = format;
   info.extent = {width, height, 1};
   info.mipLevels = 1;
-  info.arrayLayers = 1;
+  info.arrayLayers = layers;
   info.samples = VK_SAMPLE_COUNT_1_BIT;
   info.tiling = VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
@@ -216,13 +216,27 @@ GpuImage VulkanContext::createImage(uint32_t width, uint32_t height, VkFormat fo
   vkCheck(vkBindImageMemory(device_, im.image, im.memory, 0), "vkBindImageMemory");
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = im.image;
-  vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vci.viewType = layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
   vci.format = format;
-  vci.subresourceRange = {aspect, 0, 1, 0, 1};
+  vci.subresourceRange = {aspect, 0, 1, 0, layers};
   vkCheck(vkCreateImageView(device_, &vci, nullptr, &im.view), "vkCreateImageView");
   VkImageView view = im.view;
   cleanup.push([dev, view] { vkDestroyImageView(dev, view, nullptr); });
   return im;
+}
+
+VkImageView VulkanContext::createLayerView(VkImage image, VkFormat format, VkImageAspectFlags aspect,
+                                           uint32_t layer, CleanupStack& cleanup) const {
+  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vci.image = image;
+  vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vci.format = format;
+  vci.subresourceRange = {aspect, 0, 1, layer, 1};
+  VkImageView view;
+  vkCheck(vkCreateImageView(device_, &vci, nullptr, &view), "vkCreateImageView (layer)");
+  VkDevice dev = device_;
+  cleanup.push([dev, view] { vkDestroyImageView(dev, view, nullptr); });
+  return view;
 }
 
 }  // namespace tetraprobe::render_detail

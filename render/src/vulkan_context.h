@@ -65,9 +65,13 @@ class VulkanContext {
   // A buffer in memory with `props`; its destruction is pushed onto `cleanup`.
   GpuBuffer createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, VkMemoryPropertyFlags props,
                          CleanupStack& cleanup) const;
-  // A 2D image (one mip, one layer, optimal tiling) in device-local memory with a view; destruction pushed.
+  // A 2D image (one mip, `layers` layers, optimal tiling) in device-local memory with a view of all layers
+  // (2D for one layer, 2D array for more); destruction pushed.
   GpuImage createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
-                       VkImageAspectFlags aspect, CleanupStack& cleanup) const;
+                       VkImageAspectFlags aspect, CleanupStack& cleanup, uint32_t layers = 1) const;
+  // A 2D view of one layer of `image`; destruction pushed.
+  VkImageView createLayerView(VkImage image, VkFormat format, VkImageAspectFlags aspect, uint32_t layer,
+                              CleanupStack& cleanup) const;
 
  private:
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags props) const;

@@ -46,7 +46,7 @@ constexpr uint32_t tag(const char (&s)[5]) {
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
                    kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
-                   kTagOcclusion = tag("OCCL");
+                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
@@ -261,6 +261,15 @@ LevelResult validateLevel(const Level& level) {
         return corrupt("cell grid: node " + std::to_string(n) + " child out of range");
     }
   }
+  if (!level.probeKinds.empty()) {
+    if (level.probeKinds.size() != level.probes.size())
+      return corrupt("probe kinds: " + std::to_string(level.probeKinds.size()) + " for " +
+                     std::to_string(level.probes.size()) + " probes");
+    for (size_t i = 0; i < level.probeKinds.size(); ++i)
+      if (uint32_t(level.probeKinds[i]) >= kLevelProbeKindCount)
+        return corrupt("probe kind of probe " + std::to_string(i) + " is " +
+                       std::to_string(uint32_t(level.probeKinds[i])) + ", not a known kind");
+  }
   const LevelOcclusion& occ = level.occlusion;
   if (!occ.tets.empty() || !occ.planes.empty() || !occ.shadowMaps.empty()) {
     if (occ.tets.size() != level.tets.size())
@@ -389,6 +398,14 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     s.bytes(occ.shadowMaps.data(), occ.shadowMaps.size());
   }
 
+  if (!level.probeKinds.empty()) {  // none recorded writes no section: such files stay byte-identical
+    sections.push_back({kTagProbeKinds, 0, {}});
+    for (LevelProbeKind k : level.probeKinds) {
+      const auto byte = uint8_t(k);
+      sections.back().bytes.bytes(&byte, 1);
+    }
+  }
+
   Writer w;
   w.bytes(kMagic.data(), kMagic.size());
   w.u32(kVersion);
@@ -477,7 +494,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, tets, generator, outer, cellGrid, occlusion;
+  Section probes, sh, tets, generator, outer, cellGrid, occlusion, kinds;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -494,6 +511,7 @@ LevelResult loadLevel(const std::string& path, Level& out) {
                      : t == kTagOuterCells ? &outer
                      : t == kTagCellGrid   ? &cellGrid
                      : t == kTagOcclusion  ? &occlusion
+                     : t == kTagProbeKinds ? &kinds
                                            : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
@@ -529,6 +547,10 @@ LevelResult loadLevel(const std::string& path, Level& out) {
   if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
     return fail(LevelStatus::kCorrupt,
                 name + "outer cell section of " + std::to_string(outer.size) + " bytes is not whole records");
+
+  if (kinds.present && kinds.size != probeCount)
+    return fail(LevelStatus::kCorrupt, name + "probe kind section of " + std::to_string(kinds.size) +
+                                           " bytes for " + std::to_string(probeCount) + " probes");
 
   uint64_t gridSlots = 0, gridNodes = 0;
   if (cellGrid.present) {
@@ -635,6 +657,12 @@ LevelResult loadLevel(const std::string& path, Level& out) {
     occ.shadowMaps.resize(size_t(occBlocks * kShadowMapBlockBytes));
     if (!occ.shadowMaps.empty())
       std::memcpy(occ.shadowMaps.data(), body.skip(occ.shadowMaps.size()), occ.shadowMaps.size());
+  }
+
+  if (kinds.present) {
+    const auto* k = data + kinds.offset;
+    level.probeKinds.resize(size_t(probeCount));
+    for (size_t i = 0; i < level.probeKinds.size(); ++i) level.probeKinds[i] = LevelProbeKind(k[i]);
   }
 
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);

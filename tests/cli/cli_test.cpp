@@ -505,12 +505,52 @@ TEST_F(Cli, RenderReferenceAndErrorModesWriteImagesAndFigures) {
 
   const std::string vk = "render " + path("box.obj").string() + " " + level + " -o " + path("x.png").string();
   for (const std::string& bad :
-       {vk + " --mode irradiance --samples 8", vk + " --json " + path("x.json").string(),
+       {vk + " --mode irradiance --samples 8", vk + " --mode error --frames 3",
         vk + " --mode error --exposure 2", vk + " --mode error --bounces two",
-        vk + " --mode error --samples 0", vk + " --mode probes"}) {
+        vk + " --mode error --samples 0", vk + " --mode probes --exposure 2",
+        vk + " --mode indirect --shadow-map-size 256", vk + " --mode full --shadow-map-size 8",
+        vk + " --mode full --frames 0", vk + " --mode wireframe"}) {
     const CliRun r = run(bad);
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
     EXPECT_EQ(lineCount(r.err), 1) << bad << "\n" << r.err;
+  }
+}
+
+// The Vulkan modes: full (the scene JSON adds a point light to the box), the three debug views, and --json
+// with the GPU time of every pass (median of --frames frames after 2 warm-up frames). The bake records probe
+// kinds, which inspect counts.
+TEST_F(Cli, RenderFullAndDebugModesWriteImagesAndPassTimings) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  write("lit.scene.json", R"({"mesh": "box.obj", "lights": [{"type": "point", "position": [1, 2, 1],
+                               "intensity": [5, 5, 5]}]})");
+  const std::string level = path("box.tpb").string();
+  ASSERT_EQ(run("bake " + path("lit.scene.json").string() + " --samples 32 -o " + level).code, 0);
+  const CliRun inspect = run("inspect " + level + " --json");
+  ASSERT_EQ(inspect.code, 0) << inspect.err;
+  const auto kinds = nlohmann::json::parse(inspect.out).at("probes").at("kinds");
+  EXPECT_GT(kinds.value("surface", 0), 0) << kinds.dump();
+  EXPECT_GT(kinds.value("shell", 0) + kinds.value("dilated", 0), 0) << kinds.dump();
+
+  const std::string base = "render " + path("lit.scene.json").string() + " " + level +
+                           " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24";
+  const CliRun full = run(base + " --mode full -o " + path("full.png").string() + " --frames 3 --json " +
+                          path("full.json").string() + " --shadow-map-size 256");
+  if (full.err.find("no Vulkan") != std::string::npos) GTEST_SKIP() << full.err;
+  ASSERT_EQ(full.code, 0) << full.err;
+  EXPECT_TRUE(fs::file_size(path("full.png")) > 0);
+  const auto j = nlohmann::json::parse(slurp(path("full.json")));
+  EXPECT_EQ(j.at("mode").get<std::string>(), "full");
+  EXPECT_EQ(j.at("lights").get<int>(), 1);
+  EXPECT_EQ(j.at("timed_frames").get<int>(), 3);
+  EXPECT_EQ(j.at("warmup_frames").get<int>(), 2);
+  for (const char* pass : {"shadow_maps", "gbuffer", "lighting", "direct"})
+    EXPECT_GE(j.at("gpu_ms").at(pass).get<double>(), 0.0) << pass << "\n" << j.dump(2);
+  for (const char* mode : {"probes", "tets", "occlusion"}) {
+    const std::string png = path(std::string(mode) + ".png").string();
+    const CliRun r = run(base + " --mode " + mode + " -o " + png);
+    EXPECT_EQ(r.code, 0) << mode << "\n" << r.err;
+    EXPECT_TRUE(fs::exists(png)) << mode;
   }
 }
 

@@ -575,3 +575,41 @@ TEST(LevelFile, RejectsInconsistentOcclusion) {
 
 }  // namespace
 }  // namespace tetraprobe
+
+namespace tetraprobe {
+namespace {
+
+// Probe kinds ride in their own optional section: they round-trip, a level without them writes no section
+// (its bytes are those of a level from before the section existed), the section costs one byte a probe,
+// and a count or value out of range is refused.
+TEST(LevelFile, ProbeKindsRoundTripAndAbsentWritesNoSection) {
+  TempDir dir;
+  Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("none.tpb"), level));
+  for (size_t i = 0; i < level.probes.size(); ++i)
+    level.probeKinds.push_back(LevelProbeKind(uint8_t(i % kLevelProbeKindCount)));
+  ASSERT_TRUE(saveLevel(dir.file("kinds.tpb"), level));
+  Level back;
+  const LevelResult r = loadLevel(dir.file("kinds.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  EXPECT_EQ(back.probeKinds, level.probeKinds);
+  EXPECT_EQ(bytesOf(dir.file("kinds.tpb")).size(),
+            bytesOf(dir.file("none.tpb")).size() + 24 + level.probes.size());
+  back.probeKinds.clear();
+  ASSERT_TRUE(saveLevel(dir.file("dropped.tpb"), back));
+  EXPECT_EQ(bytesOf(dir.file("dropped.tpb")), bytesOf(dir.file("none.tpb")));
+  Level old;
+  ASSERT_TRUE(loadLevel(dir.file("none.tpb"), old));
+  EXPECT_TRUE(old.probeKinds.empty());
+
+  Level bad = level;
+  bad.probeKinds.pop_back();
+  EXPECT_FALSE(validateLevel(bad));
+  bad = level;
+  bad.probeKinds[0] = LevelProbeKind(uint8_t(kLevelProbeKindCount));
+  EXPECT_FALSE(validateLevel(bad));
+  EXPECT_FALSE(saveLevel(dir.file("bad.tpb"), bad));
+}
+
+}  // namespace
+}  // namespace tetraprobe

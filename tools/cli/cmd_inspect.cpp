@@ -50,6 +50,21 @@ int cmdInspect(int argc, char** argv) {
   for (const ByteSection& s : sections)
     lookup["sections"][s.name] = {{"bytes", s.bytes}, {"per_probe", double(s.bytes) / probes}};
 
+  // Probes by kind (Level::probeKinds), when the level records them.
+  constexpr const char* kKindNames[kLevelProbeKindCount] = {
+      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
+  nlohmann::json kinds = nlohmann::json::object();
+  std::string kindText;
+  if (!level.probeKinds.empty()) {
+    size_t counts[kLevelProbeKindCount] = {};
+    for (LevelProbeKind k : level.probeKinds) ++counts[uint8_t(k)];
+    for (uint32_t k = 0; k < kLevelProbeKindCount; ++k) {
+      if (counts[k] == 0) continue;
+      kinds[kKindNames[k]] = counts[k];
+      kindText += (kindText.empty() ? "" : ", ") + std::to_string(counts[k]) + " " + kKindNames[k];
+    }
+  }
+
   if (args.has("--json")) {
     nlohmann::json j = {{"path", path},
                         {"bytes", bytes},
@@ -58,7 +73,7 @@ int cmdInspect(int argc, char** argv) {
                         {"sh_order", level.shOrder},
                         {"origin", {level.origin.x, level.origin.y, level.origin.z}},
                         {"bounds", {{"min", {wlo.x, wlo.y, wlo.z}}, {"max", {whi.x, whi.y, whi.z}}}},
-                        {"probes", {{"count", level.probes.size()}}},
+                        {"probes", {{"count", level.probes.size()}, {"kinds", kinds}}},
                         {"tets", {{"count", level.tets.size()}, {"hull_faces", hull}}},
                         {"outer_cells", level.outerCells.size()},
                         {"locate",
@@ -83,7 +98,8 @@ int cmdInspect(int argc, char** argv) {
   std::printf("  origin     %.6g %.6g %.6g\n", level.origin.x, level.origin.y, level.origin.z);
   std::printf("  bounds     [%.4g %.4g %.4g] .. [%.4g %.4g %.4g]\n", wlo.x, wlo.y, wlo.z, whi.x, whi.y,
               whi.z);
-  std::printf("  probes     %zu\n", level.probes.size());
+  std::printf("  probes     %zu (%s)\n", level.probes.size(),
+              kindText.empty() ? "kinds not recorded" : kindText.c_str());
   std::printf("  tets       %zu (%d hull faces), %zu outer cells\n", level.tets.size(), hull,
               level.outerCells.size());
   if (grid.slots.empty())

@@ -1,7 +1,9 @@
 // `tetraprobe render SCENE LEVEL.tpb -o IMAGE`: a view lit per pixel by the probes, rendered headless through
 // Vulkan (G-buffer raster, then the GLSL lookup pass of shaders/tetraprobe.glsl); or, at the same camera,
 // the path-traced reference irradiance (--mode reference) and the probes' error against it (--mode error),
-// both traced on the CPU with Embree (eval/reference_image.h, eval/error_image.h).
+// both traced on the CPU with Embree (eval/reference_image.h, eval/error_image.h). --mode full adds the
+// scene's point, spot and sun lights with shadow maps and the emitters; probes, tets and occlusion are debug
+// views of the level.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,13 +36,50 @@ RenderMesh toRenderMesh(const Scene& scene) {
   mesh.positions = scene.positions;
   mesh.triangles = scene.triangles;
   mesh.triangleAlbedo.reserve(scene.triangles.size());
-  for (uint32_t m : scene.triangleMaterial) mesh.triangleAlbedo.push_back(scene.materials[m].albedo);
+  mesh.triangleEmission.reserve(scene.triangles.size());
+  for (uint32_t m : scene.triangleMaterial) {
+    mesh.triangleAlbedo.push_back(scene.materials[m].albedo);
+    mesh.triangleEmission.push_back(scene.materials[m].emission);
+  }
   return mesh;
 }
 
-// Options that only the traced modes (reference, error) take.
-constexpr const char* kTracedOnly[] = {"--samples", "--max-seconds", "--bounces",
-                                       "--seed",    "--threads",     "--json"};
+std::vector<RenderLight> toRenderLights(const Scene& scene) {
+  std::vector<RenderLight> lights;
+  for (const Light& l : scene.lights) {
+    RenderLight r;
+    r.type = l.type == LightType::kPoint  ? RenderLightType::kPoint
+             : l.type == LightType::kSpot ? RenderLightType::kSpot
+                                          : RenderLightType::kDirectional;
+    r.position = l.position;
+    r.direction = l.direction;
+    r.intensity = l.intensity;
+    r.innerConeRad = l.innerConeRad;
+    r.outerConeRad = l.outerConeRad;
+    lights.push_back(r);
+  }
+  return lights;
+}
+
+// The renderer's modes by name.
+bool gpuMode(const std::string& mode, RenderMode* out) {
+  const std::pair<const char*, RenderMode> modes[] = {{"irradiance", RenderMode::kIrradiance},
+                                                      {"indirect", RenderMode::kIndirect},
+                                                      {"full", RenderMode::kFull},
+                                                      {"probes", RenderMode::kProbes},
+                                                      {"tets", RenderMode::kTets},
+                                                      {"occlusion", RenderMode::kOcclusion}};
+  for (const auto& [name, m] : modes)
+    if (mode == name) {
+      *out = m;
+      return true;
+    }
+  return false;
+}
+
+// Options that only the traced modes (reference, error) take, and those only the GPU modes take.
+constexpr const char* kTracedOnly[] = {"--samples", "--max-seconds", "--bounces", "--seed", "--threads"};
+constexpr const char* kGpuOnly[] = {"--frames", "--shadow-map-size"};
 
 // Above this mean relative standard error the reference's own noise shows in the error image (0.1 is
 // about 0.14 stops per pixel).
@@ -152,6 +191,14 @@ int cmdRender(int argc, char** argv) {
       "Renders the scene lit per pixel by the level's probes (headless Vulkan; lavapipe works).\n"
       "IMAGE ending in .png is tone-mapped 8-bit sRGB; .exr is linear float RGBA.\n"
       "Modes: irradiance = E in W/m^2 (the light content the probes hold); indirect = albedo * E / pi;\n"
+      "full = emission + albedo / pi * (E + direct irradiance from the scene's point, spot and sun lights,\n"
+      "shadow-mapped: a 6-face cube per point/spot, one orthographic map per sun, 3x3 PCF), tone-mapped\n"
+      "(Reinhard after --exposure); for levels baked with the default content (no direct punctual light).\n"
+      "Debug views (fixed colours, no tone mapping): probes = probe dots by kind (surface green, volume\n"
+      "cyan, open light blue, filler blue, shell orange, dilated magenta, hole red, refinement yellow,\n"
+      "user white; hidden probes small and dim); tets = each pixel in its tet's colour, dark tet faces,\n"
+      "outer cells dark; occlusion = the occlusion kind used (none grey, planes blue, shadow maps green),\n"
+      "red where the all-occluded fallback ran.\n"
       "reference = the path-traced E (W/m^2, the level's light content) at the same pixels: the first\n"
       "surface the pixel-centre ray meets (either face; Vulkan culls back faces), normal towards the\n"
       "camera, --samples paths per pixel of unbounded depth (Russian roulette), on the CPU (Embree);\n"
@@ -161,7 +208,9 @@ int cmdRender(int argc, char** argv) {
       "dark blue = probes 4x too dark, white = right, dark red = 4x too bright. It prints the fraction\n"
       "of pixels off by more than 2x either way (gross) and below 0.25x (dark holes).\n"
       "Background pixels are black in every mode; reference and error need no GPU.\n"
-      "With .exr: reference = linear E, error = e (the same in r, g, b).",
+      "With .exr: reference = linear E, error = e (the same in r, g, b).\n"
+      "--json FILE with a GPU mode: GPU milliseconds per pass from Vulkan timestamp queries, the median\n"
+      "of --frames frames after 2 warm-up frames.",
       {{"--output", "-o", "IMAGE", "image to write (.png or .exr)", ""},
        {"--camera", "", "NAME", "a camera named in the scene (default: the scene's first, else automatic)",
         ""},
@@ -170,14 +219,17 @@ int cmdRender(int argc, char** argv) {
        {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
        {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
        {"--size", "", "WxH", "image size in pixels", "960x540"},
-       {"--mode", "", "irradiance|indirect|reference|error", "what the pixels show", "indirect"},
+       {"--mode", "", "irradiance|indirect|full|probes|tets|occlusion|reference|error",
+        "what the pixels show", "indirect"},
        {"--exposure", "", "auto|X", "PNG exposure multiplier before tone mapping (not for error)", "auto"},
        {"--samples", "", "N", "reference/error: paths per pixel", "64"},
        {"--max-seconds", "", "S", "reference/error: stop after the pass that ends past S s (0 = none)", "0"},
        {"--bounces", "", "unbounded|N", "reference/error: path depth", "unbounded"},
        {"--seed", "", "N", "reference/error: random seed (same seed and passes: same image)", "1"},
        {"--threads", "", "N", "reference/error: worker threads, 0 = all cores (never changes it)", "0"},
-       {"--json", "", "FILE", "reference/error: write the figures printed as JSON", ""}});
+       {"--json", "", "FILE", "write the figures printed as JSON (GPU modes: per-pass GPU times)", ""},
+       {"--frames", "", "N", "GPU modes: timed frames (median; with --json 2 warm-up frames before)", "9"},
+       {"--shadow-map-size", "", "N", "full: texels per side of each shadow-map layer", "1024"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   if (!args.has("--output")) throw UsageError("missing -o IMAGE");
@@ -190,18 +242,36 @@ int cmdRender(int argc, char** argv) {
       view.height < 1 || view.width > 16384 || view.height > 16384)
     throw UsageError("--size must be WxH with 1..16384 pixels a side, not '" + size + "'");
   const std::string mode = args.str("--mode");
-  if (mode == "irradiance")
-    view.mode = RenderMode::kIrradiance;
-  else if (mode == "indirect" || mode == "reference" || mode == "error")
-    view.mode = RenderMode::kIndirect;
-  else
-    throw UsageError("--mode must be irradiance, indirect, reference or error, not '" + mode + "'");
   const bool traced = mode == "reference" || mode == "error";
+  if (traced)
+    view.mode = RenderMode::kIndirect;
+  else if (!gpuMode(mode, &view.mode))
+    throw UsageError(
+        "--mode must be irradiance, indirect, full, probes, tets, occlusion, reference or error, not '" +
+        mode + "'");
   if (!traced)
     for (const char* name : kTracedOnly)
       if (args.has(name)) throw UsageError(std::string(name) + " applies to --mode reference and error only");
-  if (mode == "error" && args.has("--exposure"))
-    throw UsageError("--exposure does not apply to --mode error (its colour scale is fixed)");
+  if (traced)
+    for (const char* name : kGpuOnly)
+      if (args.has(name)) throw UsageError(std::string(name) + " does not apply to --mode " + mode);
+  if ((mode == "error" || isDebugMode(view.mode)) && args.has("--exposure"))
+    throw UsageError("--exposure does not apply to --mode " + mode + " (its colours are fixed)");
+  if (args.has("--shadow-map-size") && view.mode != RenderMode::kFull)
+    throw UsageError("--shadow-map-size applies to --mode full only");
+  RenderOptions options;
+  if (!traced) {
+    options.shadowMapSize = args.integer("--shadow-map-size");
+    if (options.shadowMapSize < 16 || options.shadowMapSize > 8192)
+      throw UsageError("--shadow-map-size must be in 16..8192");
+    // Timing: without --json one frame (or --frames); with it 2 warm-up frames, then --frames.
+    if (args.has("--json") || args.has("--frames")) {
+      options.timedFrames = args.integer("--frames");
+      if (options.timedFrames < 1 || options.timedFrames > 500)
+        throw UsageError("--frames must be in 1..500");
+      options.warmupFrames = args.has("--json") ? 2 : 0;
+    }
+  }
 
   const Scene scene = loadScene(args.positional()[0]);
   Level level;
@@ -248,21 +318,56 @@ int cmdRender(int argc, char** argv) {
   }
 
   const ProbeQuery query(level);
+  if (view.mode == RenderMode::kFull) {
+    options.lights = toRenderLights(scene);
+    if (level.content & kContentDirectPunctual)
+      std::fprintf(stderr,
+                   "tetraprobe render: warning: the level's probes hold direct light from the lights "
+                   "(--content all): --mode full counts it twice\n");
+  }
+  if (view.mode == RenderMode::kProbes && level.probeKinds.empty())
+    std::fprintf(stderr,
+                 "tetraprobe render: warning: the level records no probe kinds (baked before they were "
+                 "stored): every probe is drawn white\n");
   const auto t0 = std::chrono::steady_clock::now();
-  const RenderResult result = renderLevel(toRenderMesh(scene), level, query, view);
+  const RenderResult result = renderLevel(toRenderMesh(scene), level, query, view, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   std::string error;
   if (endsWith(out, ".exr")) {
     if (!writeExr(out, result.color, &error)) throw std::runtime_error(error);
+  } else if (isDebugMode(view.mode)) {
+    if (!writePngLinear(out, result.color, &error)) throw std::runtime_error(error);
   } else {
     const float exposure =
         args.str("--exposure") == "auto" ? autoExposure(result.color) : float(args.number("--exposure"));
     if (!writePng(out, result.color, exposure, &error)) throw std::runtime_error(error);
   }
-  std::printf("tetraprobe render: %s (%dx%d, %s) in %.2fs; GPU: G-buffer %.1f ms, per-pixel lookup %.1f ms\n",
-              out.c_str(), view.width, view.height, mode.c_str(), seconds, result.timings.gbufferMs,
-              result.timings.lightingMs);
+  std::string passes;
+  for (const PassTiming& p : result.timings.passes) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%s %.2f ms", passes.empty() ? "" : ", ", p.name.c_str(), p.ms);
+    passes += buf;
+  }
+  std::printf("tetraprobe render: %s (%dx%d, %s) in %.2fs; GPU (median of %d frame%s): %s\n", out.c_str(),
+              view.width, view.height, mode.c_str(), seconds, result.timings.timedFrames,
+              result.timings.timedFrames == 1 ? "" : "s", passes.empty() ? "no timestamps" : passes.c_str());
+  if (args.has("--json")) {
+    nlohmann::json gpu = nlohmann::json::object();
+    for (const PassTiming& p : result.timings.passes) gpu[p.name] = p.ms;
+    nlohmann::json report = {{"mode", mode},
+                             {"width", view.width},
+                             {"height", view.height},
+                             {"lights", options.lights.size()},
+                             {"warmup_frames", result.timings.warmupFrames},
+                             {"timed_frames", result.timings.timedFrames},
+                             {"gpu_ms", gpu},
+                             {"gpu_ms_definition",
+                              "per pass, the median over the timed frames of the difference between Vulkan "
+                              "timestamps written after the pass (and a barrier) and after the one before"},
+                             {"seconds", seconds}};
+    writeJsonReport(args.str("--json"), report);
+  }
   return 0;
 }
 

@@ -103,17 +103,20 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   std::optional<TetMesh> voxelMesh;   // voxel placement tetrahedralizes with its fillers
   std::vector<size_t> shell;          // indices of shell probes in `probes`
   std::vector<uint32_t> dilatedFrom;  // per probe, the probe whose SH it holds (after dilation)
+  std::vector<LevelProbeKind> kinds;  // per probe, the stage that placed it (Level::probeKinds)
   ProbeShTable imported;
   if (!options.importShCsv.empty()) {
     if (!options.probesCsv.empty())
       throw InputError("give either a probe CSV or an SH CSV to import, not both");
     imported = readShCsv(options.importShCsv);
     probes = imported.positions;
+    kinds.assign(probes.size(), LevelProbeKind::kUser);
     stats.importedProbes = stats.userProbes = probes.size();
   } else if (options.placement == "none") {
     if (options.probesCsv.empty()) throw InputError("placement 'none' needs user probes (--probes FILE.csv)");
     probes = readProbeCsv(options.probesCsv);
     stats.userProbes = probes.size();
+    kinds.assign(probes.size(), LevelProbeKind::kUser);
   } else if (options.placement == "voxel") {
     // User probes first (kept exactly), then the adaptive voxel probes; push-out, merge.
     PlacedProbes placed;
@@ -173,6 +176,11 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     voxelMesh = filled.mesh;
     for (size_t i = 0; i < placed.size(); ++i)
       if (placed.kinds[i] == ProbeKind::kShell) shell.push_back(i);
+    static_assert(uint8_t(ProbeKind::kShell) == uint8_t(LevelProbeKind::kShell) &&
+                      uint8_t(ProbeKind::kFiller) == uint8_t(LevelProbeKind::kFiller) &&
+                      uint8_t(ProbeKind::kSurface) == uint8_t(LevelProbeKind::kSurface),
+                  "placement kinds 0..5 are stored as they are");
+    for (ProbeKind k : placed.kinds) kinds.push_back(LevelProbeKind(uint8_t(k)));
     probes = std::move(placed.positions);
   } else if (options.placement != "grid") {
     throw InputError("unknown placement '" + options.placement + "' (voxel, grid or none)");
@@ -187,6 +195,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     const std::vector<uint8_t> inside = probesInsideGeometry(tracer, grid, 64, 0.25, options.bake.threads);
     for (size_t i = 0; i < grid.size(); ++i)
       if (!inside[i]) probes.push_back(grid[i]);
+    kinds.assign(probes.size(), LevelProbeKind::kGrid);
     stats.rejectedProbes = grid.size() - probes.size();
   }
   if (!voxelMesh) timer.mark("place");
@@ -266,6 +275,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     for (size_t k = 0; k < shell.size(); ++k)
       invalid[shell[k]] = c[k].inside || !(dc(shell[k]) > 1e-3 * median) ? 1 : 0;
     stats.dilatedProbes = dilateInvalidProbes(probes, invalid, level.sh, &dilatedFrom);
+    for (size_t i : shell)
+      if (invalid[i]) kinds[i] = LevelProbeKind::kDilated;
     timer.mark("dilate");
   }
   DeringOptions dering = options.dering;
@@ -292,8 +303,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
 
   // Appends probes (earlier probes keep their index, so their SH and seeds), bakes them with a seed of their
   // own, and tetrahedralizes and occludes the whole level again.
-  auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt) {
+  auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt, LevelProbeKind kind) {
     probes.insert(probes.end(), added.begin(), added.end());
+    kinds.insert(kinds.end(), added.size(), kind);
     const TetMesh grown =
         options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
     const MeshQuality q = meshQuality(probes, grown);
@@ -331,7 +343,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       stats.holeRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size()});
       if (holes.probes.empty()) break;
       stats.holeProbes += holes.probes.size();
-      addProbes(holes.probes, 0xb01e5ull + uint64_t(round));
+      addProbes(holes.probes, 0xb01e5ull + uint64_t(round), LevelProbeKind::kHole);
     }
     timer.mark("holes");
   }
@@ -359,10 +371,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     const std::vector<glm::dvec3> added =
         proposeRefinement(tracer, level, select, size_t(budget), options.spacing);
     stats.refineProbes = added.size();
-    if (!added.empty()) addProbes(added, 0x2ef1eull);
+    if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement);
     stats.refineAfter = scoreRefinePoints(level, check);
     timer.mark("refine");
   }
+
+  if (kinds.size() == level.probes.size()) level.probeKinds = std::move(kinds);
 
   std::ostringstream gen;
   gen << "tetraprobe 0.1.0 bake; placement="

@@ -17,17 +17,58 @@
 namespace tetraprobe {
 
 // Triangles to render. Front faces are counter-clockwise seen from the front (normal = (b-a) x (c-a));
-// back faces are culled. Each triangle is shaded with its flat normal and triangleAlbedo (linear RGB).
+// back faces are culled from the camera (both faces cast shadows). Each triangle is shaded with its flat
+// normal, triangleAlbedo and triangleEmission (linear RGB). Shadows treat every triangle as opaque.
 struct RenderMesh {
-  std::vector<glm::vec3> positions;       // world metres
-  std::vector<glm::uvec3> triangles;      // indices into positions
-  std::vector<glm::vec3> triangleAlbedo;  // one per triangle; missing entries default to 0.8 grey
+  std::vector<glm::vec3> positions;         // world metres
+  std::vector<glm::uvec3> triangles;        // indices into positions
+  std::vector<glm::vec3> triangleAlbedo;    // one per triangle; missing entries default to 0.8 grey
+  std::vector<glm::vec3> triangleEmission;  // W/(m^2 sr) from the front face; missing entries are 0
+};
+
+enum class RenderLightType { kPoint, kSpot, kDirectional };
+
+// A light of the full render, with the bake's conventions (scene/scene.h Light): radiometric units, spot
+// falloff smoothstep(cos outer, cos inner, cos angle). Lights with a radius or a sun disc are drawn as
+// points (hard-edged shadows softened only by 3x3 PCF).
+struct RenderLight {
+  RenderLightType type = RenderLightType::kPoint;
+  glm::vec3 position{0.0f};       // point, spot: world metres
+  glm::vec3 direction{0, -1, 0};  // spot, directional: direction the light travels (normalized here)
+  glm::vec3 intensity{0.0f};      // point, spot: W/sr; directional: W/m^2 at normal incidence
+  float innerConeRad = 0.0f;      // spot: full intensity inside this half-angle
+  float outerConeRad = 0.7854f;   // spot: zero outside this half-angle
 };
 
 enum class RenderMode {
   kIrradiance,  // E in W/m^2
   kIndirect,    // Lambertian outgoing radiance albedo * E / pi in W/(m^2 sr)
+  // Outgoing radiance, W/(m^2 sr): emission + albedo / pi x (E_probes + E_direct), where E_direct is the
+  // irradiance from RenderOptions::lights, each shadowed by shadow maps (point and spot: a cube of six
+  // faces; sun: one orthographic map over the scene). Right for levels baked with the default content
+  // (probes without direct punctual light); a level holding it (kContentDirectPunctual) counts it twice.
+  kFull,
+  // Debug views. color holds display colours (linear RGB in [0, 1], not radiance; write with
+  // writePngLinear) over a grey backdrop shaded by facing ratio:
+  // - kProbes: every probe as a round dot with a dark rim (depth-tested against the scene; probes behind
+  //   geometry as smaller dots at 35 % brightness), coloured by Level::probeKinds: user white, surface green
+  //   (0.1, 0.85, 0.1), volume cyan, open light blue, filler blue (0.1, 0.25, 1), shell orange (1, 0.5, 0),
+  //   dilated magenta (1, 0, 1), hole red, refinement yellow, grid grey; all white when the level records no
+  //   kinds.
+  kProbes,
+  // - kTets: each pixel in the hashed colour of the tet holding its surface point, dark where the point is
+  //   within about a pixel of a tet face (the tet edges and faces as they cut the surfaces); points outside
+  //   the hull in a darker colour per outer cell.
+  kTets,
+  // - kOcclusion: the kind of occlusion record of the pixel's tet (outside the hull: the hull tet's, as the
+  //   lookup uses): none grey (0.5), planes blue (0.15, 0.35, 1), shadow maps green (0.2, 0.9, 0.25); red
+  //   (1, 0.05, 0.05) mixed in by 50-100 % where the all-occluded fallback ran (the lookup's fallback
+  //   share > 0). All times 0.6 + 0.4 x the facing ratio.
+  kOcclusion,
 };
+
+// True for the debug views (display colours, not radiance).
+bool isDebugMode(RenderMode mode);
 
 struct RenderView {
   glm::vec3 eye{0.0f, 0.0f, 5.0f};  // world metres
@@ -51,16 +92,39 @@ struct Image {
 // For tracing the same pixels on the CPU (the path-traced reference image, eval/reference_image.h).
 glm::dvec3 pixelRayDirection(const RenderView& view, double x, double y);
 
+// GPU time of one pass, milliseconds: the median over RenderOptions::timedFrames frames.
+struct PassTiming {
+  std::string name;  // shadow_maps, gbuffer, lighting_warmup, lighting, direct, surface, probe_dots, tets,
+                     // occlusion (those the mode runs, in order)
+  double ms = 0;
+};
+
 // Wall-clock and GPU times of one renderLevel call, milliseconds. GPU times come from timestamp queries (0
-// when the queue has none). lavapipe JIT-compiles shaders at the first draw/dispatch and runs dispatches
-// asynchronously (timestamps are taken after barriers): gbufferMs includes that compile; the lighting pass is
-// preceded by a one-workgroup warm-up dispatch so lightingMs does not (the compile lands in
-// lightingWarmupMs).
+// when the queue has none), taken around each pass in a command buffer of its own (lavapipe runs dispatches
+// asynchronously and does not order a timestamp between two passes of one command buffer after the first's
+// work). lavapipe JIT-compiles shaders at the first draw/dispatch: in a single frame gbufferMs includes that
+// compile; the lighting pass is preceded by a one-workgroup warm-up dispatch so lightingMs does not (the
+// compile lands in lightingWarmupMs). With warm-up frames neither carries it.
 struct RenderTimings {
   double totalMs = 0;           // whole call: device, upload, pipelines, render, readback, object cleanup
   double gbufferMs = 0;         // GPU: G-buffer render pass
   double lightingWarmupMs = 0;  // GPU: the one-workgroup warm-up dispatch of the lighting pipeline
   double lightingMs = 0;        // GPU: the full-screen lighting compute pass
+  // Every pass the mode runs, median over the timed frames (the fields above are medians too). Empty when
+  // the queue has no timestamps.
+  std::vector<PassTiming> passes;
+  int warmupFrames = 0, timedFrames = 1;
+};
+
+// What renderLevel draws besides the mesh and the level, and how it times the GPU.
+struct RenderOptions {
+  std::vector<RenderLight> lights;  // kFull: the direct light (world frame)
+  int shadowMapSize = 1024;         // kFull: texels per side of every shadow-map layer, 16..8192
+  // The frame (every pass of the mode) is submitted warmupFrames + timedFrames times; RenderTimings hold the
+  // median over the timed ones (the first frame carries lavapipe's shader compile). Each >= 0 and
+  // timedFrames >= 1; the images are the last frame's (every frame renders the same).
+  int warmupFrames = 0;
+  int timedFrames = 1;
 };
 
 struct RenderResult {
@@ -76,8 +140,9 @@ struct RenderResult {
 // graphics+compute queue), and destroys every Vulkan object before returning. Set TETRAPROBE_VK_VALIDATION=1
 // to enable VK_LAYER_KHRONOS_validation when installed. Throws std::runtime_error with a one-line message on
 // failure (no Vulkan device, bad view size, out of memory, ...).
+// Probe kinds (kProbes) come from Level::probeKinds. `options` adds lights (kFull) and frame counts.
 RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
-                         const RenderView& view);
+                         const RenderView& view, const RenderOptions& options = {});
 
 // A regular SH L2 grid for the lighting pass to read instead of a level (shaders/lighting_grid.comp): the
 // `grid` method of `tetraprobe eval` (eval/grid_volume.h), rendered to time it against the tet lookup.
@@ -91,7 +156,8 @@ struct RenderGrid {
   const ShRgb* sh = nullptr;  // must stay valid during the call
 };
 
-// renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings). The local
+// renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings); modes
+// kIrradiance and kIndirect only. The local
 // frame's origin is glm::round(min + (dims - 1) x step / 2), the grid's centre in whole metres:
 // RenderResult::position is relative to it. Throws std::runtime_error as renderLevel, and for dims below 2,
 // a step that is not positive or no SH.

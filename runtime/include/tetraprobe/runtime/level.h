@@ -59,6 +59,23 @@ struct alignas(16) OuterCell {
 };
 static_assert(sizeof(OuterCell) == 80, "OuterCell is 80 bytes in std430");
 
+// Why a probe exists: the bake stage that placed it (one byte per probe in the optional `KIND` section,
+// docs/level_format.md). Debug views and reports only; the lookup never reads it. Values 0..5 equal
+// tetra/placement.h's ProbeKind.
+enum class LevelProbeKind : uint8_t {
+  kUser = 0,        // from --probes or --import-sh
+  kSurface = 1,     // voxel placement: empty finest voxel next to geometry
+  kVolume = 2,      // voxel placement: inside a fine volume
+  kOpen = 3,        // voxel placement: centre of a coarser open-space cell
+  kFiller = 4,      // open-space lattice, or added where tets were slivers
+  kShell = 5,       // on the level's grown bounds, holding its own baked SH
+  kDilated = 6,     // a shell probe that took its nearest valid probe's SH (outside a closed level)
+  kHole = 7,        // added by occlusion-hole filling
+  kRefinement = 8,  // added by error-driven refinement
+  kGrid = 9,        // regular grid placement (--placement grid)
+};
+constexpr uint32_t kLevelProbeKindCount = 10;
+
 struct Level {
   uint32_t content = kContentDefault;  // ProbeContent flags
   uint32_t shOrder = 2;                // 1 or 2 (L1 probes have coefficients 4..8 zero)
@@ -75,6 +92,8 @@ struct Level {
   // Per-tet occlusion against light leaking (occlusion.h, docs/occlusion.md). Optional: empty = none (every
   // probe visible); otherwise occlusion.tets.size() == tets.size().
   LevelOcclusion occlusion;
+  // Optional: empty = not recorded (levels written before the KIND section); else one per probe.
+  std::vector<LevelProbeKind> probeKinds;
   std::string generator;  // free text: tool version and options that produced the file
 };
 
