@@ -75,8 +75,8 @@ int cmdBake(int argc, char** argv) {
         "0.98"},
        {"--fill-holes", "", "ROUNDS",
         "rounds of occlusion-hole filling: surface points that see none of their tet's probes get a probe in "
-        "front of them, then tetrahedralize, bake and occlude again (0 = none)",
-        "1"},
+        "front of them, then tetrahedralize, bake and occlude again; stops early when none are left (0 = none)",
+        "3"},
        {"--probe-budget", "", "N|auto",
         "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
         "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
