@@ -75,7 +75,8 @@ int cmdBake(int argc, char** argv) {
         "0.98"},
        {"--fill-holes", "", "ROUNDS",
         "rounds of occlusion-hole filling: surface points that see none of their tet's probes get a probe in "
-        "front of them, then tetrahedralize, bake and occlude again; stops early when none are left (0 = none)",
+        "front of them, then tetrahedralize, bake and occlude again; stops early when none are left (0 = "
+        "none)",
         "3"},
        {"--probe-budget", "", "N|auto",
         "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
