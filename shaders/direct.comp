@@ -26,10 +26,10 @@ layout(std430, set = 2, binding = 1) readonly buffer ShadowMatrices {
 layout(set = 2, binding = 2) uniform sampler2DArrayShadow shadowMaps;  // compare LESS_OR_EQUAL, linear
 
 layout(push_constant) uniform DirectPush {
-  ivec2 size;      // pixels
-  int mode;        // unused here
-  int lightCount;  // entries of lights[]
-  vec4 eye;        // unused here
+  ivec2 size;       // pixels
+  int mode;         // unused here
+  int lightCount;   // entries of lights[]
+  vec4 eye;         // unused here
   vec4 shadowInfo;  // x: texels per shadow-map side; y: half-width of the sun's box, metres
 };
 

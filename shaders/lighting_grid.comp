@@ -11,9 +11,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // Header (48 bytes, tetraprobe::kGridHeaderBytes), then 27 floats per node (9 RGB coefficients, x fastest:
 // node i + dims.x * (j + dims.y * k) at gridMin + (i, j, k) * gridStep, local frame, metres).
 layout(std430, set = 0, binding = 0) readonly buffer GridVolume {
-  vec4 gridMin;   // xyz: node (0, 0, 0)
-  vec4 gridStep;  // xyz: node spacing per axis
-  ivec4 gridDims; // xyz: nodes per axis, each >= 2
+  vec4 gridMin;    // xyz: node (0, 0, 0)
+  vec4 gridStep;   // xyz: node spacing per axis
+  ivec4 gridDims;  // xyz: nodes per axis, each >= 2
   float gridSh[];
 };
 

@@ -19,14 +19,15 @@ layout(location = 1) flat out vec3 outColor;
 // light blue, filler blue, shell orange, dilated magenta, hole red, refinement yellow, grid grey; unknown
 // (the level records no kinds) white.
 vec3 kindColor(int kind) {
-  const vec3 table[10] = vec3[10](vec3(1.0), vec3(0.1, 0.85, 0.1), vec3(0.0, 0.85, 0.85), vec3(0.45, 0.65, 1.0),
-                                  vec3(0.1, 0.25, 1.0), vec3(1.0, 0.5, 0.0), vec3(1.0, 0.0, 1.0),
-                                  vec3(1.0, 0.0, 0.0), vec3(1.0, 1.0, 0.0), vec3(0.6));
+  const vec3 table[10] = vec3[10](vec3(1.0), vec3(0.1, 0.85, 0.1), vec3(0.0, 0.85, 0.85),
+                                  vec3(0.45, 0.65, 1.0), vec3(0.1, 0.25, 1.0), vec3(1.0, 0.5, 0.0),
+                                  vec3(1.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0), vec3(1.0, 1.0, 0.0), vec3(0.6));
   return kind >= 0 && kind < 10 ? table[kind] : vec3(1.0);
 }
 
 void main() {
-  const vec2 corners[6] = vec2[6](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1), vec2(-1, 1));
+  const vec2 corners[6] =
+      vec2[6](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1), vec2(-1, 1));
   vec4 probe = probes[gl_InstanceIndex];
   vec2 corner = corners[gl_VertexIndex % 6];
   vec4 clip = viewProj * vec4(probe.xyz, 1.0);

@@ -318,8 +318,12 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     });
     if (progress) progress->finish();
     // Pass 3 (BakeOptions::pathBudget): the unspent budget shared evenly among the probes above the target.
-    uint64_t used = 0;
-    for (size_t i = 0; i < probes.size(); ++i) used += skipped(i) ? 0 : uint64_t(state[i].batches);
+    auto batchesUsed = [&] {
+      uint64_t n = 0;
+      for (size_t i = 0; i < probes.size(); ++i) n += skipped(i) ? 0 : uint64_t(state[i].batches);
+      return n;
+    };
+    uint64_t used = batchesUsed();
     const uint64_t budgetBatches = options.pathBudget / kBakeBatchSize;
     const int ceilingBatches = maxBatches * kBakeBudgetCapFactor;
     const uint64_t usedBefore = used;
@@ -347,8 +351,7 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
         if (progress) progress->advance();
       });
       if (progress) progress->finish();
-      used = 0;
-      for (size_t i = 0; i < probes.size(); ++i) used += skipped(i) ? 0 : uint64_t(state[i].batches);
+      used = batchesUsed();
     }
     budgetPaths = (used - usedBefore) * kBakeBatchSize;
     parallelFor(probes.size(), options.threads, [&](size_t i) {

@@ -129,6 +129,20 @@ GridVolume bakeGridVolume(const SceneTracer& tracer, const GridLayout& layout, c
   return grid;
 }
 
+std::vector<std::pair<std::string, std::string>> generatorFields(const std::string& generator) {
+  std::vector<std::pair<std::string, std::string>> out;
+  std::istringstream in(generator);
+  std::string item;
+  while (std::getline(in, item, ';')) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) continue;
+    std::string key = item.substr(0, eq);
+    key.erase(0, key.find_first_not_of(' '));
+    out.emplace_back(std::move(key), item.substr(eq + 1));
+  }
+  return out;
+}
+
 LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32_t content) {
   LevelBakeSettings s;
   // `tetraprobe bake`'s defaults (tools/cli/cmd_bake.cpp).
@@ -140,13 +154,7 @@ LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32
   s.bake.shOrder = 2;
   s.bake.content = content;
   s.dering.mode = DeringMode::kAuto;
-  std::istringstream in(generator);
-  std::string item;
-  while (std::getline(in, item, ';')) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos) continue;
-    std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-    key.erase(0, key.find_first_not_of(' '));
+  for (const auto& [key, value] : generatorFields(generator)) {
     try {
       if (key == "bounces")
         s.bake.bounces = std::stoi(value);

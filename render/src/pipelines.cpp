@@ -233,6 +233,21 @@ VkRenderPass createOverlayPass(VkDevice device, CleanupStack& cleanup) {
   return makePass(device, info, cleanup);
 }
 
+VkFramebuffer createFramebuffer(VkDevice device, VkRenderPass pass, const VkImageView* views, uint32_t count,
+                                uint32_t width, uint32_t height, CleanupStack& cleanup, const char* what) {
+  VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+  info.renderPass = pass;
+  info.attachmentCount = count;
+  info.pAttachments = views;
+  info.width = width;
+  info.height = height;
+  info.layers = 1;
+  VkFramebuffer fb;
+  vkCheck(vkCreateFramebuffer(device, &info, nullptr, &fb), what);
+  cleanup.push([device, fb] { vkDestroyFramebuffer(device, fb, nullptr); });
+  return fb;
+}
+
 VkShaderModule createShader(VkDevice device, const uint32_t* code, size_t bytes, CleanupStack& cleanup) {
   VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   info.codeSize = bytes;

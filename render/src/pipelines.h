@@ -32,6 +32,11 @@ VkRenderPass createShadowPass(VkDevice device, CleanupStack& cleanup);
 // Probe dots over the finished colour image (loaded, GENERAL) tested against the G-buffer's depth.
 VkRenderPass createOverlayPass(VkDevice device, CleanupStack& cleanup);
 
+// A single-layer framebuffer of `pass` over `views` (in attachment order), destroyed by `cleanup`; `what`
+// names it in the error.
+VkFramebuffer createFramebuffer(VkDevice device, VkRenderPass pass, const VkImageView* views, uint32_t count,
+                                uint32_t width, uint32_t height, CleanupStack& cleanup, const char* what);
+
 VkShaderModule createShader(VkDevice device, const uint32_t* code, size_t bytes, CleanupStack& cleanup);
 
 VkPipelineLayout createPipelineLayout(VkDevice device, const VkDescriptorSetLayout* sets, uint32_t setCount,

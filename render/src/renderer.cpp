@@ -315,19 +315,10 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
 
   // G-buffer pass.
   const VkRenderPass gbufferPass = render_detail::createGbufferPass(device, cleanup);
-  VkFramebuffer gbufferFramebuffer;
-  {
-    const VkImageView views[5] = {gPosition.view, gNormal.view, gAlbedo.view, gEmission.view, depth.view};
-    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    info.renderPass = gbufferPass;
-    info.attachmentCount = 5;
-    info.pAttachments = views;
-    info.width = width;
-    info.height = height;
-    info.layers = 1;
-    vkCheck(vkCreateFramebuffer(device, &info, nullptr, &gbufferFramebuffer), "vkCreateFramebuffer");
-    cleanup.push([device, gbufferFramebuffer] { vkDestroyFramebuffer(device, gbufferFramebuffer, nullptr); });
-  }
+  const VkImageView gbufferViews[5] = {gPosition.view, gNormal.view, gAlbedo.view, gEmission.view,
+                                       depth.view};
+  const VkFramebuffer gbufferFramebuffer = render_detail::createFramebuffer(
+      device, gbufferPass, gbufferViews, 5, width, height, cleanup, "vkCreateFramebuffer");
   const VkPipelineLayout gbufferLayout = render_detail::createPipelineLayout(
       device, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, sizeof(glm::mat4), cleanup);
   const VkPipeline gbufferPipeline =
@@ -374,16 +365,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       for (uint32_t layer = 0; layer < shadowLayers; ++layer) {
         const VkImageView view1 =
             ctx.createLayerView(shadowImage.image, kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT, layer, cleanup);
-        VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        info.renderPass = shadowPass;
-        info.attachmentCount = 1;
-        info.pAttachments = &view1;
-        info.width = info.height = shadowSize;
-        info.layers = 1;
-        VkFramebuffer fb;
-        vkCheck(vkCreateFramebuffer(device, &info, nullptr, &fb), "vkCreateFramebuffer (shadow)");
-        cleanup.push([device, fb] { vkDestroyFramebuffer(device, fb, nullptr); });
-        shadowFramebuffers.push_back(fb);
+        shadowFramebuffers.push_back(render_detail::createFramebuffer(
+            device, shadowPass, &view1, 1, shadowSize, shadowSize, cleanup, "vkCreateFramebuffer (shadow)"));
       }
     }
   }
@@ -452,15 +435,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     fillBuffer(device, probeBuffer, probes.data(), probes.size() * sizeof(glm::vec4), "vkMapMemory (probes)");
     overlayPass = render_detail::createOverlayPass(device, cleanup);
     const VkImageView views[2] = {color.view, depth.view};
-    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    info.renderPass = overlayPass;
-    info.attachmentCount = 2;
-    info.pAttachments = views;
-    info.width = width;
-    info.height = height;
-    info.layers = 1;
-    vkCheck(vkCreateFramebuffer(device, &info, nullptr, &overlayFramebuffer), "vkCreateFramebuffer (dots)");
-    cleanup.push([device, overlayFramebuffer] { vkDestroyFramebuffer(device, overlayFramebuffer, nullptr); });
+    overlayFramebuffer = render_detail::createFramebuffer(device, overlayPass, views, 2, width, height,
+                                                          cleanup, "vkCreateFramebuffer (dots)");
     const VkDescriptorSetLayoutBinding b{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT,
                                          nullptr};
     dotsSetLayout = render_detail::createSetLayout(device, &b, 1, cleanup);

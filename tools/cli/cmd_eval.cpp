@@ -258,13 +258,7 @@ PipelineOptions sweepOptions(const Level& level, double spacing, int threads) {
   opt.maxSpacing = std::max(10.0, spacing);
   opt.occlusion.mode = OcclusionMode::kAuto;
   opt.occlusion.minAgreement = 0.98;
-  std::istringstream in(level.generator);
-  std::string item;
-  while (std::getline(in, item, ';')) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos) continue;
-    std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-    key.erase(0, key.find_first_not_of(' '));
+  for (const auto& [key, value] : generatorFields(level.generator)) {
     if (key == "occlusion") parseOcclusionMode(value, opt.occlusion.mode);
     if (key == "min_agreement") opt.occlusion.minAgreement = std::atof(value.c_str());
     if (key == "hole_rounds") opt.holeRounds = std::atoi(value.c_str());

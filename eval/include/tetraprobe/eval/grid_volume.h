@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -99,5 +100,9 @@ struct LevelBakeSettings {
   std::vector<std::string> found;
 };
 LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32_t content);
+
+// The generator string's `key=value` items in order (items separated by ';', keys trimmed of leading
+// spaces; items without '=' skipped). The text is free-form: this is the one place that splits it.
+std::vector<std::pair<std::string, std::string>> generatorFields(const std::string& generator);
 
 }  // namespace tetraprobe
