@@ -164,6 +164,8 @@ LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32
         s.bake.targetRelError = std::stod(value);
       else if (key == "max_samples")
         s.bake.maxSamplesPerProbe = std::stoi(value);
+      else if (key == "path_budget")
+        s.bake.pathBudget = std::stoull(value);
       else if (key == "seed")
         s.bake.seed = std::stoull(value);
       else if (key == "sh_order")

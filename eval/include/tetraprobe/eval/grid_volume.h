@@ -90,9 +90,10 @@ GridVolume bakeGridVolume(const SceneTracer& tracer, const GridLayout& layout, c
                           const DeringOptions& dering, GridBakeStats* stats = nullptr);
 
 // The bake settings a level was made with, read from its generator string (Level::generator, written by the
-// bake pipeline as "key=value" pairs separated by "; "): bounces, samples, target_error, max_samples, seed,
-// sh_order and dering. Keys that are missing keep `tetraprobe bake`'s defaults (unbounded bounces, 256
-// samples, noise 0.02, at most 8192, seed 1, L2, dering auto); `found` lists the keys that were read.
+// bake pipeline as "key=value" pairs separated by "; "): bounces, samples, target_error, max_samples,
+// path_budget, seed, sh_order and dering. Keys that are missing keep `tetraprobe bake`'s defaults (unbounded
+// bounces, 256 samples, noise 0.02, at most 8192, seed 1, L2, dering auto), except path_budget, which levels
+// baked before it existed did not have (0); `found` lists the keys that were read.
 // content is taken from `content` (the level's stored flags), never from the text.
 struct LevelBakeSettings {
   BakeOptions bake;
