@@ -6,15 +6,9 @@
 
 #include <cstdint>
 
-namespace tetraprobe::bake_detail {
+#include "tetraprobe/common/splitmix.h"
 
-// SplitMix64 finaliser (Steele, Lea & Flood 2014): a bijective 64-bit mix.
-inline uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
+namespace tetraprobe::bake_detail {
 
 // Key for one stream: chained mixing keeps (a, b, c) and (b, a, c) apart.
 inline uint64_t streamKey(uint64_t seed, uint64_t a, uint64_t b = 0) {

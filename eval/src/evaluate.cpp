@@ -13,6 +13,7 @@
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
+#include "tetraprobe/common/splitmix.h"
 #include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
@@ -26,13 +27,6 @@ constexpr double kFloor = 0.01;  // W/m^2, see evaluate.h
 
 double luminance(const glm::vec3& c) {
   return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-}
-
-uint64_t mix(uint64_t x) {  // SplitMix64 finaliser: per-point seeds independent of thread count
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
 }
 
 }  // namespace
@@ -64,14 +58,15 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
     report.points[i].surface = surface[i];
     report.points[i].reference =
         referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
-                            mix(options.seed ^ mix(i)), bake);
+                            splitmix64(options.seed ^ splitmix64(i)), bake);
     // The direct part (0 bounces: only NEE and emitters hit at once; cheap, so a quarter of the samples).
     BakeOptions direct = bake;
     direct.bounces = 0;
-    report.points[i].direct = referenceIrradiance(tracer, surface[i].position, surface[i].normal,
-                                                  std::max(1, options.samplesPerPoint / 4),
-                                                  mix(options.seed ^ mix(i) ^ 0xd1ec7ull), direct)
-                                  .irradiance;
+    report.points[i].direct =
+        referenceIrradiance(tracer, surface[i].position, surface[i].normal,
+                            std::max(1, options.samplesPerPoint / 4),
+                            splitmix64(options.seed ^ splitmix64(i) ^ 0xd1ec7ull), direct)
+            .irradiance;
     report.points[i].indirectOnly = luminance(report.points[i].direct) <
                                     kIndirectOnlyFraction * luminance(report.points[i].reference.irradiance);
     if (options.progress) progress.advance();
@@ -289,7 +284,7 @@ TimingPoints shuffledTimingPoints(const TimingPoints& points, uint64_t seed) {
   TimingPoints out = points;
   uint64_t state = seed;
   for (size_t i = out.position.size(); i > 1; --i) {
-    state = mix(state);
+    state = splitmix64(state);
     const size_t j = size_t(state % i);
     std::swap(out.position[i - 1], out.position[j]);
     std::swap(out.normal[i - 1], out.normal[j]);

@@ -17,19 +17,13 @@
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
+#include "tetraprobe/common/splitmix.h"
 
 namespace tetraprobe {
 
 namespace {
 
 constexpr double kFloor = 0.01;  // W/m^2, the evaluation's floor (evaluate.h)
-
-uint64_t mix(uint64_t x) {  // SplitMix64 finaliser: per-pixel seeds independent of thread count
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 double luminance(const glm::dvec3& c) {
   return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
@@ -150,7 +144,7 @@ ReferenceImage renderReferenceImage(const SceneTracer& tracer, const RenderView&
         pixels.size(), options.threads,
         [&](size_t k) {
           const size_t i = pixels[k];
-          const uint64_t seed = mix(options.seed ^ mix(uint64_t(i) ^ mix(pass)));
+          const uint64_t seed = splitmix64(options.seed ^ splitmix64(uint64_t(i) ^ splitmix64(pass)));
           const ReferenceIrradiance r =
               referenceIrradiance(tracer, g.position[i], g.normal[i], count, seed, bake);
           acc[k].merge(r.samples, r.irradiance, r.stderror);

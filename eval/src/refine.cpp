@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/common/splitmix.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
 
@@ -24,13 +25,6 @@ double luminance(const glm::vec3& c) {
   return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
 }
 
-uint64_t mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 }  // namespace
 
 std::vector<RefinePoint> refinePoints(const SceneTracer& tracer, const RefineOptions& options) {
@@ -42,8 +36,9 @@ std::vector<RefinePoint> refinePoints(const SceneTracer& tracer, const RefineOpt
   bake.progress = false;
   parallelFor(surface.size(), options.threads, [&](size_t i) {
     out[i].surface = surface[i];
-    out[i].reference = referenceIrradiance(tracer, surface[i].position, surface[i].normal,
-                                           options.samplesPerPoint, mix(options.seed ^ mix(i)), bake);
+    out[i].reference =
+        referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
+                            splitmix64(options.seed ^ splitmix64(i)), bake);
   });
   return out;
 }
