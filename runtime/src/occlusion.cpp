@@ -165,7 +165,17 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
     return glm::vec4(1.0f);
   const TetOcclusion& rec = occlusion.tets[size_t(tet)];
   if (rec.kind() != kOcclusionPlanes && rec.kind() != kOcclusionShadowMaps) return glm::vec4(1.0f);
-  const BaryFrame frame = baryFrame(level.tets[size_t(tet)], level.probes);
+  return occlusionVisibility(level, occlusion, tet, baryFrame(level.tets[size_t(tet)], level.probes), local,
+                             normal);
+}
+
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const BaryFrame& frame, const glm::vec3& local, const glm::vec3& normal) {
+  if (occlusion.tets.empty() || tet < 0 || size_t(tet) >= occlusion.tets.size() ||
+      size_t(tet) >= level.tets.size())
+    return glm::vec4(1.0f);
+  const TetOcclusion& rec = occlusion.tets[size_t(tet)];
+  if (rec.kind() != kOcclusionPlanes && rec.kind() != kOcclusionShadowMaps) return glm::vec4(1.0f);
   const glm::vec4 w = baryWeights(frame, local);
   const glm::vec3 n = finite3(normal) ? normal : glm::vec3(0.0f);
   const OcclusionPlane* planes = nullptr;

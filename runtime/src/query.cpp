@@ -633,7 +633,8 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
   return shade(loc, world, normal);
 }
 
-glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal) const {
+glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal,
+                            int32_t* frameTet, BaryFrame* frame) const {
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level_.tets[size_t(loc.tet)];
   glm::vec4 weights = loc.weights;
@@ -643,7 +644,20 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
   // A point that sees none of its probes blends into its fallback (occludedIrradiance).
   if (usesOcclusion()) {
     const glm::vec3 local(world - level_.origin);
-    const glm::vec4 vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
+    glm::vec4 vis;
+    if (frameTet == nullptr) {
+      vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
+    } else {
+      // The frame of a tet with occlusion data, kept while the queries stay in it (the same frame
+      // occlusionVisibility would compute, so the same bits).
+      if (*frameTet != loc.tet && level_.occlusion.tets[size_t(loc.tet)].kind() != kOcclusionNone) {
+        *frame = baryFrame(t, level_.probes);
+        *frameTet = loc.tet;
+      }
+      vis = *frameTet == loc.tet
+                ? occlusionVisibility(level_, level_.occlusion, loc.tet, *frame, local, normal)
+                : glm::vec4(1.0f);  // a tet storing nothing: every probe visible
+    }
     float fallback = 0.0f;
     weights = applyOcclusion(weights, vis, &fallback);
     if (fallback > 0.0f) {
@@ -677,7 +691,9 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
   size_t slot[kBatchGroup];
   bool haveKey[kBatchGroup], done[kBatchGroup];
   Location loc[kBatchGroup];
-  PreparedTet hint;  // the previous query's tet
+  PreparedTet hint;       // the previous query's tet
+  int32_t frameTet = -1;  // the last occluded tet whose BaryFrame `occFrame` holds (shade())
+  BaryFrame occFrame;
   // Queries since the hint last answered one: while small (coherent order) a query the hint misses is
   // located at once, so the next one has its tet as hint (deferring it to the group's pipeline would leave
   // the rest of the group a stale hint, a few tets behind).
@@ -788,7 +804,8 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       if (loc[k].tet >= 0) prefetchSh(level_, tets[size_t(loc[k].tet)]);
     }
     if (usesOcclusion()) {
-      for (size_t k = 0; k < n; ++k) out[g + k] = shade(loc[k], world[g + k], normal[g + k]);
+      for (size_t k = 0; k < n; ++k)
+        out[g + k] = shade(loc[k], world[g + k], normal[g + k], &frameTet, &occFrame);
     } else {  // shade() without occlusion, inlined (every located query has a tet)
       for (size_t k = 0; k < n; ++k)
         out[g + k] = blendIrradiance(level_.sh, tets[size_t(loc[k].tet)], loc[k].weights, normal[g + k]);

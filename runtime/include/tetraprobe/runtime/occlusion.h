@@ -72,6 +72,11 @@ glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* pl
 glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec3& local, const glm::vec3& normal);
 
+// The same with the tet's frame given (`frame` must be baryFrame(level.tets[tet], level.probes)), for callers
+// shading many points of one tet (ProbeQuery::irradianceBatch): the same result, bit for bit.
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const BaryFrame& frame, const glm::vec3& local, const glm::vec3& normal);
+
 // Weights after occlusion: weights * visibility, renormalized to sum to 1. Non-finite or negative weights
 // count as 0 and the rest are renormalized first (none left: 0.25 each); visibility is clamped to [0, 1],
 // non-finite counts as 1. `fallback` (optional) gets the share of the fallback in the answer: with s the
