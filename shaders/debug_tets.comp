@@ -51,9 +51,9 @@ void main() {
   } else {
     c = indexColor(uint(loc.tet));
     // Distance to the nearest face: w_i / |grad w_i| (w_3's gradient is minus the sum of the others').
-    vec4 w = tetraprobeWeights(loc.tet, p.xyz);
-    vec3 g0 = tetraprobeTets[loc.tet].row[0].xyz, g1 = tetraprobeTets[loc.tet].row[1].xyz,
-         g2 = tetraprobeTets[loc.tet].row[2].xyz;
+    TetraprobeBaryFrame f = tetraprobeBaryFrame(loc.tet);
+    vec4 w = tetraprobeBaryWeights(f, p.xyz);
+    vec3 g0 = f.g[0], g1 = f.g[1], g2 = f.g[2];
     vec4 g = vec4(length(g0), length(g1), length(g2), length(g0 + g1 + g2));
     vec4 dist = max(w, 0.0) / max(g, vec4(1e-20));
     float d = min(min(dist.x, dist.y), min(dist.z, dist.w));

@@ -69,16 +69,57 @@ struct TetraprobeLocation {
                   // hull tet's probes, 0 on the fourth); -1 inside
 };
 
-// Raw barycentric weights of local point p in tet t (may be negative outside): the row formula of
-// tetraprobe::Tet, summed in the CPU's order.
-vec4 tetraprobeWeights(int t, vec3 p) {
+// Probe p's position (local frame, metres).
+vec3 tetraprobeProbePosition(int p) {
+  return uintBitsToFloat(uvec3(tetraprobeProbeData[3 * p], tetraprobeProbeData[3 * p + 1],
+                               tetraprobeProbeData[3 * p + 2]));
+}
+
+// tetraprobe::BaryFrame (level.h): w_i = dot(g[i], X - origin) for i = 0..2, w_3 = 1 - the others, from the
+// tet's probe positions, operation for operation as baryFrame() / baryWeights() (runtime/src/bary_frame.cpp).
+struct TetraprobeBaryFrame {
+  vec3 origin;
+  vec3 g[3];
+};
+
+vec3 tetraprobeCross(vec3 a, vec3 b) {
+  precise vec3 c = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+  return c;
+}
+float tetraprobeDot(vec3 a, vec3 b) {
+  precise float d = (a.x * b.x + a.y * b.y) + a.z * b.z;
+  return d;
+}
+
+TetraprobeBaryFrame tetraprobeBaryFrame(int t) {
+  ivec4 v = tetraprobeTets[t].v;
+  vec3 p3 = tetraprobeProbePosition(v.w);
+  precise vec3 e0 = tetraprobeProbePosition(v.x) - p3, e1 = tetraprobeProbePosition(v.y) - p3,
+               e2 = tetraprobeProbePosition(v.z) - p3;
+  vec3 c0 = tetraprobeCross(e1, e2), c1 = tetraprobeCross(e2, e0), c2 = tetraprobeCross(e0, e1);
+  precise float inv = 1.0 / tetraprobeDot(e0, c0);
+  TetraprobeBaryFrame f;
+  f.origin = p3;
+  precise vec3 g0 = c0 * inv, g1 = c1 * inv, g2 = c2 * inv;
+  f.g[0] = g0;
+  f.g[1] = g1;
+  f.g[2] = g2;
+  return f;
+}
+
+vec4 tetraprobeBaryWeights(TetraprobeBaryFrame f, vec3 x) {
+  precise vec3 d = x - f.origin;
   precise vec4 w;
-  for (int i = 0; i < 3; ++i) {
-    vec4 r = tetraprobeTets[t].row[i];
-    w[i] = r.x * p.x + r.y * p.y + r.z * p.z + r.w;
-  }
-  w[3] = 1.0 - w[0] - w[1] - w[2];
+  w[0] = tetraprobeDot(f.g[0], d);
+  w[1] = tetraprobeDot(f.g[1], d);
+  w[2] = tetraprobeDot(f.g[2], d);
+  w[3] = ((1.0 - w[0]) - w[1]) - w[2];
   return w;
+}
+
+// Raw barycentric weights of local point p in tet t (may be negative outside).
+vec4 tetraprobeWeights(int t, vec3 p) {
+  return tetraprobeBaryWeights(tetraprobeBaryFrame(t), p);
 }
 
 // Index of the smallest weight (the first one on ties).
@@ -519,10 +560,12 @@ void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
   ivec4 v = tetraprobeTets[t].v;
   for (int i = 0; i < 9; ++i) c[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
-    int base = 27 * v[k];
+    int base = 3 * tetraprobeProbeCount + 27 * v[k];
     for (int i = 0; i < 9; ++i) {
       int o = base + 3 * i;
-      precise vec3 s = c[i] + vec3(tetraprobeSh[o], tetraprobeSh[o + 1], tetraprobeSh[o + 2]) * w[k];
+      vec3 sh = uintBitsToFloat(
+          uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
+      precise vec3 s = c[i] + sh * w[k];
       c[i] = s;
     }
   }
@@ -538,9 +581,8 @@ float tetraprobeOccSmooth(float e0, float e1, float x) {  // as the CPU's smooth
   return r;
 }
 
-vec4 tetraprobeOccBias(int t, vec4 w, vec3 n) {
-  vec3 g0 = tetraprobeTets[t].row[0].xyz, g1 = tetraprobeTets[t].row[1].xyz,
-       g2 = tetraprobeTets[t].row[2].xyz;
+vec4 tetraprobeOccBias(TetraprobeBaryFrame f, vec4 w, vec3 n) {
+  vec3 g0 = f.g[0], g1 = f.g[1], g2 = f.g[2];
   precise vec3 gs = g0 + g1 + g2;
   precise vec4 gn = vec4(dot(g0, n), dot(g1, n), dot(g2, n), -dot(gs, n));
   float m = max(max(abs(gn.x), abs(gn.y)), max(abs(gn.z), abs(gn.w)));
@@ -610,14 +652,10 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
   uint header = tetraprobeOccData[2u * uint(t)], cells = tetraprobeOccData[2u * uint(t) + 1u];
   uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
   if (kind != 1u && kind != 2u) return vec4(1.0);
-  precise vec4 w;
-  for (int i = 0; i < 3; ++i) {
-    vec4 r = tetraprobeTets[t].row[i];
-    w[i] = r.x * x.x + r.y * x.y + r.z * x.z + r.w;
-  }
-  w[3] = 1.0 - w[0] - w[1] - w[2];
+  TetraprobeBaryFrame frame = tetraprobeBaryFrame(t);
+  vec4 w = tetraprobeBaryWeights(frame, x);
   if (isnan(n.x) || isnan(n.y) || isnan(n.z) || isinf(n.x) || isinf(n.y) || isinf(n.z)) n = vec3(0.0);
-  w = tetraprobeOccBias(t, w, n);
+  w = tetraprobeOccBias(frame, w, n);
   vec4 vis = vec4(1.0);
   if (kind == 1u) {
     if (count == 0u) return vec4(1.0);

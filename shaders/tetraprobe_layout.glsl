@@ -2,8 +2,8 @@
 // and offsets static_assert'ed, in runtime/include/tetraprobe/runtime/gpu_layout.h. Permissive.
 //
 // Bindings (all storage buffers, read-only) in descriptor set TETRAPROBE_SET:
-//   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 80 bytes each (tetraprobe::Tet)
-//   TETRAPROBE_BINDING + 1  TetraprobeSh    27 floats per probe: coefficient-major, then r,g,b (tetraprobe::ShRgb)
+//   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 32 bytes each (tetraprobe::Tet)
+//   TETRAPROBE_BINDING + 1  TetraprobeProbes  positions (3 floats per probe), then SH (27 floats per probe)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
 //   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 128 bytes per cell
 //   TETRAPROBE_BINDING + 4  TetraprobeCells  the sparse cell grid + BSP: a 32-byte header, then int data
@@ -20,20 +20,20 @@
 #endif
 
 // One tetrahedron. v: probe indices; n[i]: the tet across the face opposite v[i], -1 on the hull.
-// Barycentrics of local point X: w_i = dot(row[i].xyz, X) + row[i].w (i = 0..2), w_3 = 1 - w_0 - w_1 - w_2.
+// Barycentrics come from the four probe positions (tetraprobeBaryFrame in tetraprobe.glsl).
 struct TetraprobeTet {
-  ivec4 v;      // offset 0
-  ivec4 n;      // offset 16
-  vec4 row[3];  // offset 32; 80 bytes in all
+  ivec4 v;  // offset 0
+  ivec4 n;  // offset 16; 32 bytes in all
 };
 
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly buffer TetraprobeTets {
   TetraprobeTet tetraprobeTets[];
 };
 
-// Probe p, coefficient i (index l*(l+1)+m), channel c (0 r, 1 g, 2 b) is at 27 * p + 3 * i + c.
-layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 1) readonly buffer TetraprobeSh {
-  float tetraprobeSh[];
+// Float bits. Probe p's position (local frame, metres) at 3 * p + 0..2; its SH coefficient i (index
+// l*(l+1)+m), channel c (0 r, 1 g, 2 b) at 3 * tetraprobeProbeCount + 27 * p + 3 * i + c.
+layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 1) readonly buffer TetraprobeProbes {
+  uint tetraprobeProbeData[];
 };
 
 // The start grid (tetraprobe::StartGrid): cell (x,y,z) of `dims` covers gridMin + [x,x+1) * cellSize, and

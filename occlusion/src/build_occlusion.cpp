@@ -39,7 +39,7 @@ constexpr int kTexelRank = 4;              // a texel stores the median of their
 struct Sample {
   glm::vec3 local{0.0f};
   glm::vec3 normal{0.0f};   // zero for volume samples
-  glm::vec4 weights{0.0f};  // raw barycentrics from the Tet rows (as the runtime computes them)
+  glm::vec4 weights{0.0f};  // raw barycentrics from the BaryFrame (as the runtime computes them)
   uint32_t visible = 0;     // bit i: probe v[i] visible according to the rays
 };
 
@@ -78,13 +78,6 @@ glm::vec3 toWorld(const Level& level, const glm::dvec3& local) {
   return glm::vec3(level.origin + local);
 }
 
-glm::vec4 rawWeights(const Tet& t, const glm::vec3& x) {
-  glm::vec4 w;
-  for (int i = 0; i < 3; ++i) w[i] = t.row[i][0] * x.x + t.row[i][1] * x.y + t.row[i][2] * x.z + t.row[i][3];
-  w[3] = 1.0f - w[0] - w[1] - w[2];
-  return w;
-}
-
 // The triangles cutting the tet, clipped to it.
 std::vector<Polygon> clippedGeometry(const Context& ctx, const TetFrame& frame,
                                      std::vector<uint32_t>& scratch) {
@@ -119,7 +112,7 @@ std::vector<Polygon> clippedGeometry(const Context& ctx, const TetFrame& frame,
 // Volume samples (stratified, no normal) and surface samples (area-uniform on the clipped geometry, each
 // from both sides), answered by rays to the four probes.
 std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const Tet& tet,
-                                const std::vector<Polygon>& polys, uint64_t& rays) {
+                                const BaryFrame& bary, const std::vector<Polygon>& polys, uint64_t& rays) {
   std::vector<Sample> samples;
   const int nv = ctx.options.volumeSamples, ns = ctx.options.surfaceSamples;
   samples.reserve(size_t(nv) + 2 * size_t(ns));
@@ -136,7 +129,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
   auto answer = [&](Sample& s, const glm::dvec3& x, const glm::dvec3& n) {
     s.local = glm::vec3(x);
     s.normal = glm::vec3(n);
-    s.weights = rawWeights(tet, s.local);
+    s.weights = baryWeights(bary, s.local);
     const double offset = std::max(double(ctx.tracer.rayEpsilon()), kRayOffset * frame.scale);
     const glm::vec3 origin = toWorld(ctx.level, x + n * offset);
     for (int i = 0; i < 4; ++i) {
@@ -191,12 +184,12 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
   return samples;
 }
 
-void score(Candidate& c, const std::vector<Sample>& samples, const Tet& tet) {
+void score(Candidate& c, const std::vector<Sample>& samples, const BaryFrame& bary) {
   c.agreeing = c.leaking = c.surfaceAgreeing = 0;
   const OcclusionPlane* planes = c.planes.data();
   const uint8_t* texels = c.texels.data();
   for (const Sample& s : samples) {
-    const glm::vec4 vis = evaluateTetOcclusion(c.rec, planes, texels, tet, s.weights, s.normal);
+    const glm::vec4 vis = evaluateTetOcclusion(c.rec, planes, texels, bary, s.weights, s.normal);
     for (int i = 0; i < 4; ++i) {
       const bool stored = vis[i] > 0.5f, truth = (s.visible >> i & 1u) != 0;
       if (stored == truth) ++c.agreeing;
@@ -237,7 +230,7 @@ std::vector<Cluster> clusterPlanes(const std::vector<Polygon>& polys, double sca
 
 // Planes candidate with the first `count` clusters; each cell's mask is the samples' majority answer.
 bool makePlanes(Candidate& c, const std::vector<Cluster>& clusters, uint32_t count, const TetFrame& frame,
-                const Tet& tet, const std::vector<Sample>& samples) {
+                const BaryFrame& bary, const std::vector<Sample>& samples) {
   for (uint32_t k = 0; k < count; ++k) {
     double d[4], m = 0.0;
     for (int i = 0; i < 4; ++i) {
@@ -249,7 +242,7 @@ bool makePlanes(Candidate& c, const std::vector<Cluster>& clusters, uint32_t cou
   }
   int votes[8][4][2] = {};
   for (const Sample& s : samples) {
-    const glm::vec4 w = biasWeights(tet, s.weights, s.normal);
+    const glm::vec4 w = biasWeights(bary, s.weights, s.normal);
     uint32_t cell = 0;
     for (uint32_t k = 0; k < count; ++k) {
       const glm::vec4 pc(c.planes[k].c[0], c.planes[k].c[1], c.planes[k].c[2], c.planes[k].c[3]);
@@ -297,6 +290,7 @@ void makeShadowMaps(Candidate& c, const Context& ctx, const TetFrame& frame, uin
 TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& scratch) {
   TetResult r;
   const Tet& tet = ctx.level.tets[index];
+  const BaryFrame bary = baryFrame(tet, ctx.level.probes);  // the runtime's weights (occlusion.h)
   glm::dvec3 p[4];
   for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(ctx.level.probes[size_t(tet.v[i])]);
   const TetFrame frame = makeTetFrame(p);
@@ -304,7 +298,7 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
   const std::vector<Polygon> polys = clippedGeometry(ctx, frame, scratch);
   if (polys.empty()) return r;
   r.hasGeometry = true;
-  const std::vector<Sample> samples = makeSamples(ctx, frame, tet, polys, r.rays);
+  const std::vector<Sample> samples = makeSamples(ctx, frame, tet, bary, polys, r.rays);
   r.answers = 4 * uint64_t(samples.size());
   for (const Sample& s : samples)
     if (s.normal != glm::vec3(0.0f)) r.surfaceAnswers += 4;
@@ -313,7 +307,7 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
 
   // Candidates in order of cost; auto takes the first that is good enough, else the best.
   Candidate none;
-  score(none, samples, tet);
+  score(none, samples, bary);
   Candidate best = none;
   bool haveBest = mode == OcclusionMode::kAuto;
   auto consider = [&](const Candidate& c) {
@@ -340,8 +334,8 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
         if (used[k]) continue;
         chosen.back() = clusters[k];
         Candidate c;
-        if (!makePlanes(c, chosen, count, frame, tet, samples)) continue;
-        score(c, samples, tet);
+        if (!makePlanes(c, chosen, count, frame, bary, samples)) continue;
+        score(c, samples, bary);
         if (bestIndex == clusters.size() || c.agreeing > bestAdd.agreeing) {
           bestAdd = c;
           bestIndex = k;
@@ -361,7 +355,7 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
   if (mode == OcclusionMode::kAuto || mode == OcclusionMode::kShadowMaps) {
     Candidate c;
     makeShadowMaps(c, ctx, frame, r.rays);
-    score(c, samples, tet);
+    score(c, samples, bary);
     consider(c);
   }
   r.chosen = haveBest ? best : none;

@@ -21,21 +21,21 @@ namespace tetraprobe {
 namespace {
 
 constexpr std::array<uint8_t, 8> kMagic = {0x89, 'T', 'P', 'B', '\r', '\n', 0x1A, '\n'};
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kHeaderBytes = 80;
 constexpr uint32_t kHeaderCrcOffset = 76;    // CRC-32 of header bytes [0, 76)
 constexpr uint64_t kSectionEntryBytes = 24;  // tag u32, flags u32, offset u64, size u64
 constexpr uint32_t kMaxSections = 64;
 constexpr uint64_t kMaxSectionBytes = uint64_t(1) << 40;  // bounds every size sum below 2^47
-constexpr uint32_t kSectionRequired = 1u;  // flags: a reader that does not know the tag must refuse
-constexpr uint64_t kProbeBytes = 3 * 4;    // position: 3 x f32
-constexpr uint64_t kShBytes = 27 * 4;      // SH: 9 coefficients x RGB f32
-constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4 + 12 * 4;                    // v[4] i32, n[4] i32, row[3][4] f32
+constexpr uint32_t kSectionRequired = 1u;      // flags: a reader that does not know the tag must refuse
+constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
+constexpr uint64_t kShBytes = 27 * 4;          // SH: 9 coefficients x RGB f32
+constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // v[4] i32, n[4] i32
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
 constexpr uint64_t kMaxGeneratorBytes = 1u << 20;
-static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 80-byte std430 Tet");
+static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 32-byte std430 Tet");
 static_assert(kShBytes == sizeof(ShRgb), "the file's SH record is the 108-byte ShRgb");
 static_assert(kOuterCellBytes == sizeof(OuterCell), "the file's outer cell record is the 80-byte OuterCell");
 
@@ -188,9 +188,6 @@ LevelResult validateLevel(const Level& level) {
           return corrupt(where + "neighbour " + std::to_string(n) + " does not name it back");
       }
     }
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c)
-        if (!std::isfinite(tet.row[r][c])) return corrupt(where + "non-finite barycentric row");
   }
   if (!level.outerCells.empty()) {
     int64_t hullFaces = 0;
@@ -340,8 +337,6 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     Writer& w = sections.back().bytes;
     for (int32_t v : t.v) w.i32(v);
     for (int32_t n : t.n) w.i32(n);
-    for (const auto& row : t.row)
-      for (float x : row) w.f32(x);
   }
   sections.push_back({kTagGenerator, kSectionRequired, {}});
   sections.back().bytes.bytes(level.generator.data(), level.generator.size());
@@ -599,8 +594,6 @@ LevelResult loadLevel(const std::string& path, Level& out) {
   for (Tet& t : level.tets) {
     for (int32_t& v : t.v) v = body.i32();
     for (int32_t& n : t.n) n = body.i32();
-    for (auto& row : t.row)
-      for (float& x : row) x = body.f32();
   }
   level.generator.assign(reinterpret_cast<const char*>(data + generator.offset), size_t(generatorBytes));
   if (outer.present) {

@@ -135,10 +135,8 @@ glm::vec2 shadowMapCellCentre(int cell) {
   return glm::vec2((float(iu) + off) / 4.0f, (float(row) + off) / 4.0f);
 }
 
-glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3& normal) {
-  const glm::vec3 g0(tet.row[0][0], tet.row[0][1], tet.row[0][2]);
-  const glm::vec3 g1(tet.row[1][0], tet.row[1][1], tet.row[1][2]);
-  const glm::vec3 g2(tet.row[2][0], tet.row[2][1], tet.row[2][2]);
+glm::vec4 biasWeights(const BaryFrame& frame, const glm::vec4& weights, const glm::vec3& normal) {
+  const glm::vec3 g0 = frame.grad[0], g1 = frame.grad[1], g2 = frame.grad[2];
   const glm::vec4 gn(glm::dot(g0, normal), glm::dot(g1, normal), glm::dot(g2, normal),
                      -glm::dot(g0 + g1 + g2, normal));
   const float m =
@@ -148,13 +146,13 @@ glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3&
 }
 
 glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* planes,
-                               const uint8_t* shadowMap, const Tet& tet, const glm::vec4& weights,
+                               const uint8_t* shadowMap, const BaryFrame& frame, const glm::vec4& weights,
                                const glm::vec3& normal) {
   switch (rec.kind()) {
     case kOcclusionPlanes:
-      return planesVisibility(rec, planes, biasWeights(tet, weights, normal));
+      return planesVisibility(rec, planes, biasWeights(frame, weights, normal));
     case kOcclusionShadowMaps:
-      return shadowMapVisibility(shadowMap, biasWeights(tet, weights, normal));
+      return shadowMapVisibility(shadowMap, biasWeights(frame, weights, normal));
     default:
       return glm::vec4(1.0f);
   }
@@ -166,11 +164,19 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
       size_t(tet) >= level.tets.size())
     return glm::vec4(1.0f);
   const TetOcclusion& rec = occlusion.tets[size_t(tet)];
-  const Tet& t = level.tets[size_t(tet)];
-  glm::vec4 w;
-  for (int i = 0; i < 3; ++i)
-    w[i] = t.row[i][0] * local.x + t.row[i][1] * local.y + t.row[i][2] * local.z + t.row[i][3];
-  w[3] = 1.0f - w[0] - w[1] - w[2];
+  if (rec.kind() != kOcclusionPlanes && rec.kind() != kOcclusionShadowMaps) return glm::vec4(1.0f);
+  return occlusionVisibility(level, occlusion, tet, baryFrame(level.tets[size_t(tet)], level.probes), local,
+                             normal);
+}
+
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const BaryFrame& frame, const glm::vec3& local, const glm::vec3& normal) {
+  if (occlusion.tets.empty() || tet < 0 || size_t(tet) >= occlusion.tets.size() ||
+      size_t(tet) >= level.tets.size())
+    return glm::vec4(1.0f);
+  const TetOcclusion& rec = occlusion.tets[size_t(tet)];
+  if (rec.kind() != kOcclusionPlanes && rec.kind() != kOcclusionShadowMaps) return glm::vec4(1.0f);
+  const glm::vec4 w = baryWeights(frame, local);
   const glm::vec3 n = finite3(normal) ? normal : glm::vec3(0.0f);
   const OcclusionPlane* planes = nullptr;
   const uint8_t* texels = nullptr;
@@ -182,7 +188,7 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
       return glm::vec4(1.0f);
     texels = occlusion.shadowMaps.data() + size_t(rec.offset()) * kShadowMapBlockBytes;
   }
-  const glm::vec4 vis = evaluateTetOcclusion(rec, planes, texels, t, w, n);
+  const glm::vec4 vis = evaluateTetOcclusion(rec, planes, texels, frame, w, n);
   return finite4(vis) ? vis : glm::vec4(1.0f);
 }
 

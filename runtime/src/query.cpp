@@ -2,18 +2,15 @@
 // rows per tet, and a walk that steps across the face opposite the most negative weight), started from a
 // coarse uniform grid of start tets (a lighter cousin of Valient 2014's per-cell lookup).
 //
-// Numerics: the stored rows are float (the GPU's layout); the CPU evaluates them in double on the
-// double-precision local point, so its only float error is the rows' own rounding: up to ~1e-4 in a weight
-// on slivers. Where that could decide the answer (the smallest weight within the rows' error bound of 0, or
-// below kBoundaryBand), the walk switches to weights computed in double from the four probe positions (signed
-// volumes, exactWeights()) for its remaining steps, so a point on or near a face, edge or vertex gets a tet
-// whose weights are exact to ~1e-12 and within [-1e-6, 1 + 1e-6] before clamping, on slivers too. Away from
-// faces the float rows decide alone (the common, cheap path). A walk is bounded (kMaxWalkSteps) and checked
-// for cycles (Brent); a cycle is answered by the best tet on it (see walk()), and anything else ends in a
-// brute-force scan, so every query terminates with a defined answer.
+// Numerics: the level stores no barycentric rows (level.h): every weight is computed in double from the
+// tet's four probe positions (signed volumes, ExactFrame), so a point on or near a face, edge or vertex gets a
+// tet whose weights are exact to ~1e-16 x condition and within [-1e-6, 1 + 1e-6] before clamping, on slivers
+// too, and two tets sharing a face agree on which side of it a point is. A walk is bounded (kMaxWalkSteps)
+// and checked for cycles (Brent); a cycle is answered by the best tet on it (see walk()), and anything else
+// ends in a brute-force scan, so every query terminates with a defined answer.
 //
 // Outside the hull (a walk leaving through a hull face whose plane the point is beyond, decided from the
-// probe positions in double, not the rows) the walk continues across the outer cells (outer_cells.h) to the
+// probe positions in double) the walk continues across the outer cells (outer_cells.h) to the
 // cell whose extruded hull triangle holds the point, so the outside answer is continuous and
 // path-independent.
 #include "tetraprobe/runtime/query.h"
@@ -45,74 +42,71 @@ constexpr int kMaxGridDim = 1024;         // per axis
 constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
-// Plain walk steps (across a face the rows put x clearly beyond) taken from the cell grid's start tet before
+// Plain walk steps (across a face x is clearly beyond) taken from the cell grid's start tet before
 // the full walk (walk()); irradianceBatch takes them in lock step over a group of queries.
 constexpr int kPlainSteps = 8;
 constexpr int kHintPlainSteps = 3;    // irradianceBatch: steps from the previous query's tet
 constexpr size_t kBatchGroup = 16;    // irradianceBatch: queries interleaved stage by stage
 constexpr size_t kHintRecent = 4;     // irradianceBatch: "coherent" while the hint answered this recently
 constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
-// A smallest float-row weight within this of 0 (or within the rows' rounding bound, rowErrorBound) switches
-// the walk to exact weights. 1e-4 covers the rows' rounding on ordinary tets with a wide margin.
+// A tet whose smallest weight at x is at least this holds x alone (no other tet within kInsideEps): its
+// answer is final without a walk (gridLocate, irradianceBatch's previous tet).
 constexpr double kBoundaryBand = 1e-4;
 
-// Raw barycentric weights of local point x in tet t (may be negative outside), evaluated in double.
-inline void tetWeights(const Tet& t, const glm::dvec3& x, double w[4]) {
-  for (int i = 0; i < 3; ++i)
-    w[i] = double(t.row[i][0]) * x.x + double(t.row[i][1]) * x.y + double(t.row[i][2]) * x.z +
-           double(t.row[i][3]);
-  w[3] = 1.0 - w[0] - w[1] - w[2];
-}
-
-// Bound on the error of tetWeights() from the rows' float rounding at x: each row entry carries a relative
-// error of at most 2^-24, so w_i errs by at most 2^-24 (sum_j |row_ij x_j| + |row_i3|), and w_3 by the sum of
-// the three. Twice that sum, for margin.
-inline double rowErrorBound(const Tet& t, const glm::dvec3& x) {
-  double e = 0.0;
-  for (int i = 0; i < 3; ++i)
-    e += std::abs(double(t.row[i][0]) * x.x) + std::abs(double(t.row[i][1]) * x.y) +
-         std::abs(double(t.row[i][2]) * x.z) + std::abs(double(t.row[i][3]));
-  return 2.0 * 0x1p-24 * e;
-}
-
-// Barycentric weights of local point x in tet t computed in double from the probe positions: w_i is the
-// signed volume of the tet with vertex i moved to x, over the tet's own volume. Each of those volumes is
+// Barycentric weights of local point x in a tet, computed in double from its four probe positions: w_i is
+// the signed volume of the tet with vertex i moved to x, over the tet's own volume. Each of those volumes is
 // (x - p) . n with n the cross product of two edges of the face opposite vertex i (short vectors between
-// probes, accurate to ~1e-16 of their length squared), and the tet's volume comes from its edges alone, so
-// a weight is exact to ~1e-16 x (condition number) near the tet (~1e-12 on the 1e4 slivers of placed
+// probes, exact in double: the float positions' differences), and the tet's volume comes from its edges
+// alone, so a weight is exact to ~1e-16 x (condition number) near the tet (~1e-12 on the 1e4 slivers of placed
 // levels) and keeps its sign far from it. (Volumes formed from vectors x - p_i instead cancel to nothing at
 // 1e6 m from a sliver: they made a point 1e6 m outside the hull "inside" a tet of condition 3e9,
 // tests/stability.) The four need not sum to exactly 1; callers renormalize (finish()).
-inline void exactWeights(const Tet& t, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
-                         double w[4]) {
-  glm::dvec3 p[4];
-  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(probes[size_t(t.v[i])]);
-  const glm::dvec3 e0 = p[0] - p[3], e1 = p[1] - p[3], e2 = p[2] - p[3], d3 = x - p[3];
-  // D(a, b, c, d) = (a - d) . ((b - d) x (c - d)): the tet's volume is D(p0, p1, p2, p3), and vertex i moved
-  // to x gives v0 = D(x, p1, p2, p3), v1 = D(p0, x, p2, p3), v2 = D(p0, p1, x, p3) (cyclic triple products
-  // about p3), v3 = D(p0, p1, p2, x) = -D(x, p0, p1, p2) (about p2).
-  const double volume = glm::dot(e0, glm::cross(e1, e2));
-  const double v0 = glm::dot(d3, glm::cross(e1, e2));
-  const double v1 = glm::dot(d3, glm::cross(e2, e0));
-  const double v2 = glm::dot(d3, glm::cross(e0, e1));
-  const double v3 = -glm::dot(x - p[2], glm::cross(p[0] - p[2], p[1] - p[2]));
-  w[0] = v0 / volume;
-  w[1] = v1 / volume;
-  w[2] = v2 / volume;
-  w[3] = v3 / volume;
+//
+// The level stores no barycentric rows (level.h): these are the only weights the CPU uses. ExactFrame holds
+// what depends on the tet alone (the face normals and 1 / volume), so a tet tested against many points
+// (irradianceBatch's previous tet) prepares it once; tetWeights() prepares and evaluates, with the same
+// operations on the same values, so both give the same bits.
+struct ExactFrame {
+  glm::dvec3 p2{0.0}, p3{0.0};
+  glm::dvec3 c[4];   // c[0..2]: normals of the faces opposite p0..p2 (about p3); c[3]: opposite p3 (about p2)
+  double inv = 0.0;  // 1 / volume (infinite for a tet flat in float: the weights are then not finite)
+
+  void prepare(const Tet& t, const std::vector<glm::vec3>& probes) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(probes[size_t(t.v[i])]);
+    const glm::dvec3 e0 = p[0] - p[3], e1 = p[1] - p[3], e2 = p[2] - p[3];
+    // D(a, b, c, d) = (a - d) . ((b - d) x (c - d)): the tet's volume is D(p0, p1, p2, p3), and vertex i moved
+    // to x gives v0 = D(x, p1, p2, p3), v1 = D(p0, x, p2, p3), v2 = D(p0, p1, x, p3) (cyclic triple products
+    // about p3), v3 = D(p0, p1, p2, x) = -D(x, p0, p1, p2) (about p2).
+    c[0] = glm::cross(e1, e2);
+    c[1] = glm::cross(e2, e0);
+    c[2] = glm::cross(e0, e1);
+    c[3] = glm::cross(p[0] - p[2], p[1] - p[2]);
+    p2 = p[2];
+    p3 = p[3];
+    inv = 1.0 / glm::dot(e0, c[0]);
+  }
+
+  void weights(const glm::dvec3& x, double w[4]) const {
+    const glm::dvec3 d3 = x - p3;
+    w[0] = glm::dot(d3, c[0]) * inv;
+    w[1] = glm::dot(d3, c[1]) * inv;
+    w[2] = glm::dot(d3, c[2]) * inv;
+    w[3] = -glm::dot(x - p2, c[3]) * inv;
+  }
+};
+
+// Raw barycentric weights of local point x in tet t (may be negative outside), exact (ExactFrame).
+inline void tetWeights(const Tet& t, const std::vector<glm::vec3>& probes, const glm::dvec3& x, double w[4]) {
+  ExactFrame f;
+  f.prepare(t, probes);
+  f.weights(x, w);
 }
 
-// True when the float rows put x inside tet t by more than their rounding could move (the smallest weight
-// w[m] at least kBoundaryBand and above rowErrorBound): the rows' weights are then the answer as they are.
-inline bool clearlyInside(const Tet& t, const glm::dvec3& x, double wMin) {
-  return wMin >= kBoundaryBand && wMin > rowErrorBound(t, x);
-}
-
-// True when the rows' smallest weight wMin at x is within their rounding (or kBoundaryBand) of 0 on either
-// side: the rows cannot tell which side of that face x is on, the probe positions decide.
-inline bool nearFace(const Tet& t, const glm::dvec3& x, double wMin) {
-  const double a = std::abs(wMin);
-  return a < kBoundaryBand || a <= rowErrorBound(t, x);
+// True when x is inside tet t by a margin (the smallest exact weight at least kBoundaryBand): no other tet
+// holds x within kInsideEps, so every walk accepts this tet with these weights.
+inline bool clearlyInside(double wMin) {
+  return wMin >= kBoundaryBand;
 }
 
 // Smallest weight and its index.
@@ -123,38 +117,21 @@ inline int minIndex(const double w[4]) {
   return m;
 }
 
-// A tet prepared for testing many nearby points (irradianceBatch's previous tet): its rows converted to
-// double once, and the column sums of their magnitudes, so a point's weights are tetWeights()'s (the same
-// operations on the same values) and the rounding bound costs three products instead of twelve.
+// A tet prepared for testing many nearby points (irradianceBatch's previous tet): its ExactFrame, so a
+// point's weights are tetWeights()'s bits at a fraction of the cost.
 struct PreparedTet {
   int32_t tet = -1;
-  double row[3][4];
-  double absCol[4];  // sum_i |row[i][j]| for j = 0..2, then sum_i |row[i][3]|
+  ExactFrame frame;
 
-  void prepare(const std::vector<Tet>& tets, int32_t t) {
+  void prepare(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, int32_t t) {
     tet = t;
-    const Tet& r = tets[size_t(t)];
-    for (int j = 0; j < 4; ++j) {
-      absCol[j] = 0.0;
-      for (int i = 0; i < 3; ++i) {
-        row[i][j] = double(r.row[i][j]);
-        absCol[j] += std::abs(row[i][j]);
-      }
-    }
+    frame.prepare(tets[size_t(t)], probes);
   }
 
-  // w = tetWeights(tets[tet], x); true when clearlyInside(tets[tet], x, min w) holds. The bound used is
-  // rowErrorBound's sum taken in another order, times (1 + 2^-40): at least rowErrorBound(tet, x) (the two
-  // sums of 12 non-negative terms differ by far less than 2^-40 relative), so this may refuse a point
-  // clearlyInside accepts (the caller then takes the full path), never the reverse.
+  // w = tetWeights(tets[tet], x); true when clearlyInside(min w).
   bool clearlyHolds(const glm::dvec3& x, double w[4]) const {
-    for (int i = 0; i < 3; ++i) w[i] = row[i][0] * x.x + row[i][1] * x.y + row[i][2] * x.z + row[i][3];
-    w[3] = 1.0 - w[0] - w[1] - w[2];
-    const double wMin = w[minIndex(w)];
-    if (!(wMin >= kBoundaryBand)) return false;
-    const double e =
-        absCol[0] * std::abs(x.x) + absCol[1] * std::abs(x.y) + absCol[2] * std::abs(x.z) + absCol[3];
-    return wMin > (1.0 + 0x1p-40) * (2.0 * 0x1p-24 * e);
+    frame.weights(x, w);
+    return clearlyInside(w[minIndex(w)]);
   }
 };
 
@@ -243,15 +220,12 @@ bool beyondHullFace(const Tet& t, const std::vector<glm::vec3>& probes, int f, c
   return (sx > 0.0 && so < 0.0) || (sx < 0.0 && so > 0.0);
 }
 
-// Walks from tet `cur` towards x, stepping across the face opposite the most negative weight. Float rows
-// (rounded independently per tet) can leave slivers' shared faces with slightly disagreeing planes: a point
-// in such a gap is claimed by no tet, and the walk cycles around it. A cycle therefore answers with the tet
-// along the walk that holds x best (largest smallest weight), if it holds it within kCycleAcceptEps;
-// otherwise (or after maxSteps) the walk returns false and the caller scans.
+// Walks from tet `cur` towards x, stepping across the face opposite the most negative weight. Weights are
+// exact (tetWeights), so two tets sharing a face agree on its side to ~1e-16 x condition; a walk that still
+// cycles (within that rounding, around a point on a sliver's face) answers with the tet along the walk that
+// holds x best (largest smallest weight), if it holds it within kCycleAcceptEps; otherwise (or after
+// maxSteps) the walk returns false and the caller scans.
 // When the walk leaves through a hull face, `out` is the clamped hull tet and *exitFace the face's index.
-// Near a face (|smallest weight| < kBoundaryBand, or within the rows' rounding) the walk continues with
-// exact weights (exactWeights) from that tet on: every later step and the answer's weights come from the
-// probe positions, so the tet named holds x to ~1e-12 and the weights are accurate on slivers too.
 bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, const glm::dvec3& x,
           int32_t cur, int maxSteps, Location& out, int32_t* exitFace) {
   *exitFace = -1;
@@ -259,32 +233,13 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
   int power = 1, lam = 0;
   int32_t best = -1;
   double bestMin = -std::numeric_limits<double>::infinity(), bestW[4] = {};
-  bool exact = false;
-  const auto weights = [&](int32_t t, double w[4]) {
-    if (exact)
-      exactWeights(tets[size_t(t)], probes, x, w);
-    else
-      tetWeights(tets[size_t(t)], x, w);
-  };
-  // The answer's weights depend on the tet alone, not on the path: the rows' where they hold x clearly
-  // (as a walk that never came near a face takes them), else the exact ones.
-  const auto accept = [&](int32_t t, const double w[4]) {
-    if (exact) {
-      double wf[4];
-      tetWeights(tets[size_t(t)], x, wf);
-      if (clearlyInside(tets[size_t(t)], x, wf[minIndex(wf)])) return finish(t, wf, true);
-    }
-    return finish(t, w, true);
-  };
+  const auto weights = [&](int32_t t, double w[4]) { tetWeights(tets[size_t(t)], probes, x, w); };
+  // The answer's weights depend on the tet alone, not on the path.
+  const auto accept = [&](int32_t t, const double w[4]) { return finish(t, w, true); };
   for (int step = 0; step < maxSteps; ++step) {
     double w[4];
     weights(cur, w);
     int m = minIndex(w);
-    if (!exact && nearFace(tets[size_t(cur)], x, w[m])) {
-      exact = true;  // near a face of this tet: the rows' rounding could decide, the positions decide instead
-      weights(cur, w);
-      m = minIndex(w);
-    }
     int32_t next = tets[size_t(cur)].n[m];
     if (w[m] >= -kInsideEps || std::isnan(w[m])) {
       // Inside within tolerance. A point within kInsideEps of a face may be more inside the neighbour: take
@@ -302,7 +257,7 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
     }
     if (next < 0) {
       // Leaving through a hull face: the point is outside the (convex) hull, if it is beyond the face's
-      // plane. The float rows cannot tell within their rounding; the probe positions can (in double).
+      // plane (from the probe positions in double, the face's own orientation test).
       if (beyondHullFace(tets[size_t(cur)], probes, m, x)) {
         out = finish(cur, w, false);
         *exitFace = m;
@@ -341,15 +296,16 @@ bool walk(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes, co
   return false;
 }
 
-// One plain walk step from tet `cur`: the neighbour across the face of the most negative weight when the rows
-// put x clearly beyond that face (below -kInsideEps and not within their rounding) and the neighbour exists;
-// else -1 (the full walk takes over). A walk's first steps are usually such steps: walk() from the tet they
-// reach takes the same path the walk from `cur` would (it is deterministic, and such steps are its own).
-inline int32_t plainStep(const std::vector<Tet>& tets, const glm::dvec3& x, int32_t cur, double w[4]) {
+// One plain walk step from tet `cur`: the neighbour across the face of the most negative weight when x is
+// beyond that face (below -kInsideEps) and the neighbour exists; else -1 (the full walk takes over). A walk's
+// first steps are usually such steps: walk() from the tet they reach takes the same path the walk from `cur`
+// would (it is deterministic, and such steps are its own).
+inline int32_t plainStep(const std::vector<Tet>& tets, const std::vector<glm::vec3>& probes,
+                         const glm::dvec3& x, int32_t cur, double w[4]) {
   const Tet& t = tets[size_t(cur)];
-  tetWeights(t, x, w);
+  tetWeights(t, probes, x, w);
   const int m = minIndex(w);
-  if (!(w[m] < -kInsideEps) || nearFace(t, x, w[m])) return -1;
+  if (!(w[m] < -kInsideEps)) return -1;
   return t.n[m];
 }
 
@@ -431,7 +387,7 @@ Location scanAll(const Level& level, const glm::dvec3& x) {
   double bestMin = -std::numeric_limits<double>::infinity(), bestW[4] = {0.25, 0.25, 0.25, 0.25};
   for (size_t t = 0; t < level.tets.size(); ++t) {
     double w[4];
-    tetWeights(level.tets[t], x, w);
+    tetWeights(level.tets[t], level.probes, x, w);
     const double m = w[minIndex(w)];
     if (best < 0 || m > bestMin) {
       best = int32_t(t);
@@ -439,30 +395,7 @@ Location scanAll(const Level& level, const glm::dvec3& x) {
       std::copy(w, w + 4, bestW);
     }
   }
-  if (best < 0 || !nearFace(level.tets[size_t(best)], x, bestMin))
-    return finish(best, bestW, bestMin >= -kInsideEps);
-  // Near a face of the best tet by the rows: the tet and its neighbours decided by exact weights, as the
-  // walk decides there.
-  exactWeights(level.tets[size_t(best)], level.probes, x, bestW);
-  bestMin = bestW[minIndex(bestW)];
-  const Tet& t0 = level.tets[size_t(best)];
-  int32_t exactBest = best;
-  for (int f = 0; f < 4; ++f) {
-    const int32_t nb = t0.n[f];
-    if (nb < 0) continue;
-    double w[4];
-    exactWeights(level.tets[size_t(nb)], level.probes, x, w);
-    const double m = w[minIndex(w)];
-    if (m > bestMin || (m == bestMin && nb < exactBest)) {
-      exactBest = nb;
-      bestMin = m;
-      std::copy(w, w + 4, bestW);
-    }
-  }
-  double wf[4];
-  tetWeights(level.tets[size_t(exactBest)], x, wf);
-  if (clearlyInside(level.tets[size_t(exactBest)], x, wf[minIndex(wf)])) return finish(exactBest, wf, true);
-  return finish(exactBest, bestW, bestMin >= -kInsideEps);
+  return finish(best, bestW, bestMin >= -kInsideEps);
 }
 
 // The answer of outer cell k: its triangle weights (tiny negatives clamped, renormalized) on the hull tet.
@@ -671,10 +604,10 @@ Location ProbeQuery::gridLocate(const glm::dvec3& x) const {
   int32_t cur = startTet(x, cellGridLeaf(cellGrid(), x));
   double w[4];
   for (int s = 0; s < kPlainSteps; ++s) {
-    const int32_t next = plainStep(level_.tets, x, cur, w);
+    const int32_t next = plainStep(level_.tets, level_.probes, x, cur, w);
     if (next < 0) {
       // Clearly inside (the leaf's tet, usually): the walk would accept these weights at once.
-      if (clearlyInside(level_.tets[size_t(cur)], x, w[minIndex(w)])) return finish(cur, w, true);
+      if (clearlyInside(w[minIndex(w)])) return finish(cur, w, true);
       break;
     }
     cur = next;
@@ -700,7 +633,8 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
   return shade(loc, world, normal);
 }
 
-glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal) const {
+glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal,
+                            int32_t* frameTet, BaryFrame* frame) const {
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level_.tets[size_t(loc.tet)];
   glm::vec4 weights = loc.weights;
@@ -710,7 +644,20 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
   // A point that sees none of its probes blends into its fallback (occludedIrradiance).
   if (usesOcclusion()) {
     const glm::vec3 local(world - level_.origin);
-    const glm::vec4 vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
+    glm::vec4 vis;
+    if (frameTet == nullptr) {
+      vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
+    } else {
+      // The frame of a tet with occlusion data, kept while the queries stay in it (the same frame
+      // occlusionVisibility would compute, so the same bits).
+      if (*frameTet != loc.tet && level_.occlusion.tets[size_t(loc.tet)].kind() != kOcclusionNone) {
+        *frame = baryFrame(t, level_.probes);
+        *frameTet = loc.tet;
+      }
+      vis = *frameTet == loc.tet
+                ? occlusionVisibility(level_, level_.occlusion, loc.tet, *frame, local, normal)
+                : glm::vec4(1.0f);  // a tet storing nothing: every probe visible
+    }
     float fallback = 0.0f;
     weights = applyOcclusion(weights, vis, &fallback);
     if (fallback > 0.0f) {
@@ -728,8 +675,8 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
 // group, so their misses overlap (group prefetching, Chen et al., "Improving hash join performance through
 // prefetching", ICDE 2004). Coherent queries (pixel order) first try the previous query's tet when they lie
 // within a quarter cell of the previous query: a few steps from it to a tet that holds the point clearly (by
-// more than the rows' rounding) give the answer the full locate() gives, as no other tet can hold such a point
-// within tolerance. That tet is kept prepared (PreparedTet: double rows, a three-product rounding bound), and
+// more than kBoundaryBand) give the answer the full locate() gives, as no other tet can hold such a point
+// within tolerance. That tet is kept prepared (PreparedTet: its face normals and inverse volume in double), and
 // a query it misses shortly after a hit is located at once rather than in the group's pipeline, so the next
 // query starts from its tet. Without occlusion the SH blend and irradiance run inline (blendIrradiance).
 // Every stage computes what locate() computes, in the same order: out[i] is bit-identical to
@@ -744,7 +691,9 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
   size_t slot[kBatchGroup];
   bool haveKey[kBatchGroup], done[kBatchGroup];
   Location loc[kBatchGroup];
-  PreparedTet hint;  // the previous query's tet
+  PreparedTet hint;       // the previous query's tet
+  int32_t frameTet = -1;  // the last occluded tet whose BaryFrame `occFrame` holds (shade())
+  BaryFrame occFrame;
   // Queries since the hint last answered one: while small (coherent order) a query the hint misses is
   // located at once, so the next one has its tet as hint (deferring it to the group's pipeline would leave
   // the rest of the group a stale hint, a few tets behind).
@@ -764,12 +713,12 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       if (hint.tet >= 0 && std::max({d.x, d.y, d.z}) < hintGate) {
         double w[4];
         done[k] = hint.clearlyHolds(x[k], w);
-        // Else up to kHintPlainSteps plain steps (across a face the rows put x clearly beyond) from it.
+        // Else up to kHintPlainSteps plain steps (across a face x is clearly beyond) from it.
         for (int s = 0; s < kHintPlainSteps && !done[k]; ++s) {
           const Tet& t = tets[size_t(hint.tet)];
           const int m = minIndex(w);
-          if (!(w[m] < -kInsideEps) || nearFace(t, x[k], w[m]) || t.n[m] < 0) break;
-          hint.prepare(tets, t.n[m]);
+          if (!(w[m] < -kInsideEps) || t.n[m] < 0) break;
+          hint.prepare(tets, level_.probes, t.n[m]);
           prefetchSh(level_, tets[size_t(hint.tet)]);
           done[k] = hint.clearlyHolds(x[k], w);
         }
@@ -782,7 +731,7 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       if (sinceHit <= kHintRecent) {
         loc[k] = gridLocate(x[k]);
         done[k] = true;
-        if (loc[k].inside) hint.prepare(tets, loc[k].tet);
+        if (loc[k].inside) hint.prepare(tets, level_.probes, loc[k].tet);
         prefetchSh(level_, tets[size_t(loc[k].tet)]);
         continue;
       }
@@ -831,11 +780,11 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       for (size_t k = 0; k < n; ++k) {
         if (done[k] || code[k] != 0) continue;
         double w[4];
-        const int32_t next = plainStep(tets, x[k], cur[k], w);
+        const int32_t next = plainStep(tets, level_.probes, x[k], cur[k], w);
         if (next < 0) {
           code[k] = 1;
           // Clearly inside (the leaf's tet, usually): the walk would accept these weights at once.
-          if (clearlyInside(tets[size_t(cur[k])], x[k], w[minIndex(w)])) {
+          if (clearlyInside(w[minIndex(w)])) {
             loc[k] = finish(cur[k], w, true);
             prefetchSh(level_, tets[size_t(cur[k])]);
             code[k] = 2;
@@ -855,12 +804,13 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
       if (loc[k].tet >= 0) prefetchSh(level_, tets[size_t(loc[k].tet)]);
     }
     if (usesOcclusion()) {
-      for (size_t k = 0; k < n; ++k) out[g + k] = shade(loc[k], world[g + k], normal[g + k]);
+      for (size_t k = 0; k < n; ++k)
+        out[g + k] = shade(loc[k], world[g + k], normal[g + k], &frameTet, &occFrame);
     } else {  // shade() without occlusion, inlined (every located query has a tet)
       for (size_t k = 0; k < n; ++k)
         out[g + k] = blendIrradiance(level_.sh, tets[size_t(loc[k].tet)], loc[k].weights, normal[g + k]);
     }
-    if (loc[n - 1].inside && loc[n - 1].tet != hint.tet) hint.prepare(tets, loc[n - 1].tet);
+    if (loc[n - 1].inside && loc[n - 1].tet != hint.tet) hint.prepare(tets, level_.probes, loc[n - 1].tet);
   }
 }
 

@@ -11,7 +11,7 @@ namespace tetraprobe {
 namespace {
 
 const char* bindingName(int i) {
-  static const char* const kNames[kGpuBindingCount] = {"tets",        "sh",        "grid",
+  static const char* const kNames[kGpuBindingCount] = {"tets",        "probes",    "grid",
                                                        "outer cells", "cell grid", "occlusion"};
   return kNames[i];
 }
@@ -130,7 +130,8 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
 
   std::vector<char> data[kGpuBindingCount];
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
-  appendBytes(data[kGpuBindingSh], level.sh.data(), level.sh.size());
+  appendBytes(data[kGpuBindingProbes], level.probes.data(), level.probes.size());
+  appendBytes(data[kGpuBindingProbes], level.sh.data(), level.sh.size());
   GpuGridHeader header{};
   for (int i = 0; i < 3; ++i) {
     header.min[i] = grid.min[i];

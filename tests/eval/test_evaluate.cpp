@@ -193,7 +193,7 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   };
   EXPECT_EQ(section("positions"), level.probes.size() * 12);
   EXPECT_EQ(section("sh"), level.probes.size() * 108);
-  EXPECT_EQ(section("tets"), level.tets.size() * 80);
+  EXPECT_EQ(section("tets"), level.tets.size() * 32);
   EXPECT_EQ(section("cell_grid"), cellGridBytes(query.cellGrid()));
   EXPECT_GT(section("cell_grid"), 0u);
   EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 80);

@@ -101,7 +101,7 @@ TEST(OcclusionRuntime, ShadowMapDepthIsExactForPlanes) {
 // length, and a zero normal moves nothing.
 TEST(OcclusionRuntime, BiasMovesNoWeightMoreThanTheBias) {
   const Level level = test::makeLevel(test::regularTet());
-  const Tet& t = level.tets[0];
+  const BaryFrame t = baryFrame(level.tets[0], level.probes);
   const glm::vec4 w(0.1f, 0.2f, 0.3f, 0.4f);
   for (glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0.3f, -2.0f, 0.5f), glm::vec3(-1, 1, 1)}) {
     const glm::vec4 b = biasWeights(t, w, n);

@@ -36,8 +36,8 @@ std::set<std::pair<uint32_t, uint32_t>> descriptorSlots(const uint32_t* words, s
 TEST(GlslInclude, BindingMacrosMoveTheBuffers) {
   const auto slots = descriptorSlots(kSpirv_engine_include_frag, sizeof(kSpirv_engine_include_frag) / 4);
   const std::set<std::pair<uint32_t, uint32_t>> expected = {
-      {2u, 5u + kGpuBindingTets},       {2u, 5u + kGpuBindingSh},    {2u, 5u + kGpuBindingGrid},
-      {2u, 5u + kGpuBindingOuterCells}, {2u, 5u + kGpuBindingCells}, {2u, 5u + kGpuBindingOcclusion}};
+      {2u, 5u + kGpuBindingTets},       {2u, 5u + kGpuBindingProbes}, {2u, 5u + kGpuBindingGrid},
+      {2u, 5u + kGpuBindingOuterCells}, {2u, 5u + kGpuBindingCells},  {2u, 5u + kGpuBindingOcclusion}};
   EXPECT_EQ(slots, expected);
 }
 

@@ -85,11 +85,6 @@ class ExactScan {
       for (int32_t t : buckets_[size_t(c.x + kDim * (c.y + kDim * c.z))]) {
         const Tet& tet = level_.tets[size_t(t)];
         double w[4];
-        for (int i = 0; i < 3; ++i)
-          w[i] = double(tet.row[i][0]) * x.x + double(tet.row[i][1]) * x.y + double(tet.row[i][2]) * x.z +
-                 double(tet.row[i][3]);
-        w[3] = 1.0 - w[0] - w[1] - w[2];
-        if (*std::min_element(w, w + 4) < -1e-3) continue;  // far outside this tet, whatever the rounding
         test::exactTetWeights(level_, tet, x, w);
         const double m = *std::min_element(w, w + 4);
         if (m > bestMin || (m == bestMin && t < best)) {
@@ -141,15 +136,15 @@ double tolerance(const Level& level, const Location& a, const Location& b, const
     return std::min({l.weights[0], l.weights[1], l.weights[2], l.weights[3]});
   };
   if (a.inside && b.inside && a.tet == b.tet)
-    return 1e-6 + 2.0 * test::rowRoundingBound(level.tets[size_t(a.tet)], world - level.origin);
+    return 1e-6;  // the same tet: both weights exact (from the probe positions)
   if (a.inside && b.inside && minWeight(a) > 1e-5f && minWeight(b) > 1e-5f) return 1e-6;
   double slope = 0.0;
   for (const Location* loc : {&a, &b}) {
     if (loc->outerCell >= 0) continue;
-    const Tet& tet = level.tets[size_t(loc->tet)];
+    const BaryFrame frame = baryFrame(level.tets[size_t(loc->tet)], level.probes);
     glm::dvec3 sum(0.0);
     for (int r = 0; r < 3; ++r) {
-      const glm::dvec3 g(tet.row[r][0], tet.row[r][1], tet.row[r][2]);
+      const glm::dvec3 g(frame.grad[r]);
       slope = std::max(slope, glm::length(g));
       sum += g;
     }

@@ -180,7 +180,7 @@ TEST(LevelFile, RoundTripIsBitExact) {
   // probe, 80 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 24 per
   // node), a 4-byte CRC.
   EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
-            80 + 6 * 24 + 4 + 120 * level.probes.size() + 80 * level.tets.size() + level.generator.size() +
+            80 + 6 * 24 + 4 + 120 * level.probes.size() + 32 * level.tets.size() + level.generator.size() +
                 80 * level.outerCells.size() + 64 + 16 * g.slots.size() + 24 * g.nodes.size() + 4);
 }
 
@@ -239,7 +239,7 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},        // tet 0 vertex 0
                {tets + 4, uint32_t(-7), "out of range"},                         // tet 0 vertex 1
                {tets + 16, uint32_t(level.tets.size()), "out of range"},         // tet 0 neighbour 0
-               {tets + 32, 0x7FC00000u, "non-finite"},                           // tet 0 row: NaN
+               {tets + 4, uint32_t(level.tets[0].v[0]), "repeated"},             // tet 0 vertex 1 = vertex 0
                {outer + 12, uint32_t(level.tets.size()), "out of range"},        // outer cell 0's tet
                {outer + 16, uint32_t(level.outerCells.size()), "out of range"},  // outer cell 0's link 0
                {outer + 0, uint32_t(level.probes.size() + 3), "not a vertex"},   // outer cell 0's probe 0
@@ -304,7 +304,7 @@ TEST(LevelFile, MutationsBehindValidChecksumsAreRejectedOrSafe) {
     }
   }
   EXPECT_GT(accepted,
-            100);  // float fields (positions, SH, rows) take most mutations: both paths are exercised
+            100);  // float fields (positions, SH) take most mutations: both paths are exercised
 }
 
 // A header claiming 1e12 tets must fail on the size check, before any allocation.
@@ -341,7 +341,8 @@ TEST(LevelFile, RejectsOtherFilesAndVersions) {
   EXPECT_EQ(loadLevel(dir.file("text.tpb"), out).status, LevelStatus::kNotALevel);
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
   std::vector<char> b = bytesOf(dir.file("full.tpb"));
-  for (uint32_t version : {1u, 3u}) {  // version 1 had no section table: re-bake such levels
+  for (uint32_t version :
+       {1u, 2u, 4u}) {  // version 1 had no section table, 2 stored rows: re-bake such levels
     putU32(b, 8, version);
     fixHeaderCrc(b);
     writeBytes(dir.file("other.tpb"), b, b.size());

@@ -63,16 +63,6 @@ inline void exactTetWeights(const Level& level, const Tet& t, const glm::dvec3& 
   for (int i = 0; i < 4; ++i) w[i] = v[i] / sum;
 }
 
-// How far the float rows' weights of tet t at local x may be from the exact ones: 2^-24 relative per row
-// entry, summed over the terms (w_3 = 1 - the others carries their sum).
-inline double rowRoundingBound(const Tet& t, const glm::dvec3& x) {
-  double e = 0.0;
-  for (int i = 0; i < 3; ++i)
-    e += std::abs(double(t.row[i][0]) * x.x) + std::abs(double(t.row[i][1]) * x.y) +
-         std::abs(double(t.row[i][2]) * x.z) + std::abs(double(t.row[i][3]));
-  return 0x1p-24 * e;
-}
-
 // The interpolation a location stands for: probe -> weight (independent of which of two tets sharing a face
 // was named).
 inline std::map<int32_t, double> probeWeights(const Level& level, const Location& loc) {

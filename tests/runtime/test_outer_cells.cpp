@@ -231,13 +231,13 @@ TEST(OuterCells, ContinuousAcrossHullBoundary) {
         expectNormalized(in);
         expectNormalized(out);
         const double jump = maxDifference(probeWeights(*level, in), probeWeights(*level, out));
-        // The inside answer comes from the tet's float rows: their rounding (~1.2e-7 of |x| times the rows'
-        // slope, largest on hull slivers) and the 2e-7 m gap bound the jump besides the outer cell's own.
-        const Tet& tet = level->tets[size_t(in.tet)];
+        // The weights' slope (largest on hull slivers) times the 2e-7 m gap, and a rounding allowance of
+        // ~1.2e-7 of |x| times it, bound the jump besides the outer cell's own.
+        const BaryFrame frame = baryFrame(level->tets[size_t(in.tet)], level->probes);
         double slope = 0.0;
         glm::dvec3 sum(0.0);
         for (int r = 0; r < 3; ++r) {
-          const glm::dvec3 g(tet.row[r][0], tet.row[r][1], tet.row[r][2]);
+          const glm::dvec3 g(frame.grad[r]);
           slope = std::max(slope, glm::length(g));
           sum += g;
         }

@@ -116,50 +116,14 @@ std::vector<Tet> buildTetRecords(const std::vector<glm::dvec3>& points, const Te
       rec.v[i] = v;
       rec.n[i] = mesh.neighbours[t][i];
     }
-    // glm matrices are column-major: columns P0-P3, P1-P3, P2-P3.
-    const glm::dmat3 a(p[0] - p[3], p[1] - p[3], p[2] - p[3]);
-    const double det = glm::determinant(a);
-    const glm::dmat3 m = glm::inverse(a);
-    const glm::dvec3 centroid = 0.25 * (p[0] + p[1] + p[2] + p[3]);
-    bool finite = det != 0.0 && std::isfinite(det);
-    // The tet's bounding box, for the choice of offset below.
-    glm::dvec3 lo = p[0], hi = p[0];
-    for (int i = 1; i < 4; ++i) {
-      lo = glm::min(lo, p[i]);
-      hi = glm::max(hi, p[i]);
-    }
-    for (int i = 0; i < 3; ++i) {
-      // Row i of M is (m[0][i], m[1][i], m[2][i]) in glm's [column][row] indexing, rounded to float. The
-      // offset -(M P3)_i equals 0.25 - M_i . centroid; it is computed from the *rounded* row so that the
-      // float record gives w_i(centroid) = 0.25 up to one rounding of the offset, instead of also carrying
-      // the row's rounding error times the distance from the local origin.
-      for (int j = 0; j < 3; ++j) rec.row[i][j] = float(m[j][i]);
-      const double offset = 0.25 - (double(rec.row[i][0]) * centroid.x + double(rec.row[i][1]) * centroid.y +
-                                    double(rec.row[i][2]) * centroid.z);
-      // That offset makes the weight's error (rounded row - exact row) . (x - centroid), up to 2^-24
-      // sum_j |row_j| |x_j - c_j|; the runtime bounds it by 2^-23 (sum_j |row_j x_j| + |offset|)
-      // (runtime/src/query.cpp, rowErrorBound), which a tet near the local origin with a steep row (a needle
-      // or sliver there: |offset| small by cancellation, |x| small) can miss by far: 0.003 in a weight where
-      // the bound said 1e-7 (tests/stability, CapsAndNeedles...). Where the bound does not cover that error
-      // for every point of the tet's box, the offset is the plain -(M P3)_i from the double row instead,
-      // whose error (rounded row - exact row) . x + one rounding is what the bound assumes.
-      double spread = 0.0, least = 0.0;
-      for (int j = 0; j < 3; ++j) {
-        const double r = std::abs(double(rec.row[i][j]));
-        spread += r * std::max(hi[j] - centroid[j], centroid[j] - lo[j]);
-        least += r * (lo[j] > 0.0 ? lo[j] : (hi[j] < 0.0 ? -hi[j] : 0.0));
-      }
-      if (spread <= 2.0 * least + std::abs(double(float(offset))))
-        rec.row[i][3] = float(offset);
-      else
-        rec.row[i][3] = float(-(m[0][i] * p[3].x + m[1][i] * p[3].y + m[2][i] * p[3].z));
-      for (int j = 0; j < 4; ++j) finite = finite && std::isfinite(rec.row[i][j]);
-    }
+    // No barycentric rows are stored (level.h): the runtime computes weights from the probe positions. A
+    // tet must still have a finite, non-zero volume in double for them to exist.
+    const double det = glm::determinant(glm::dmat3(p[0] - p[3], p[1] - p[3], p[2] - p[3]));
+    const bool finite = det != 0.0 && std::isfinite(det);
     const std::string name = "buildTetRecords: tet " + std::to_string(t) + " (probes " +
                              std::to_string(rec.v[0]) + ", " + std::to_string(rec.v[1]) + ", " +
                              std::to_string(rec.v[2]) + ", " + std::to_string(rec.v[3]) + ")";
-    if (!finite)
-      throw InputError(name + " is too flat for float barycentric rows; move or remove one of its probes");
+    if (!finite) throw InputError(name + " is flat (zero volume); move or remove one of its probes");
     checkFloatCollapse(p, rec, name, origin);
   }
   return records;

@@ -15,8 +15,8 @@ namespace tetraprobe {
 
 // Binding TETRAPROBE_BINDING + i of set TETRAPROBE_SET (defaults: set 0, first binding 0).
 enum GpuBinding : uint32_t {
-  kGpuBindingTets = 0,        // TetraprobeTets: Tet[] (80 bytes each)
-  kGpuBindingSh = 1,          // TetraprobeSh: float[27 * probes] (ShRgb[], 108 bytes each)
+  kGpuBindingTets = 0,        // TetraprobeTets: Tet[] (32 bytes each)
+  kGpuBindingProbes = 1,      // TetraprobeProbes: positions (3 floats a probe), then SH (27 floats a probe)
   kGpuBindingGrid = 2,        // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
   kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
   kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
@@ -25,13 +25,15 @@ enum GpuBinding : uint32_t {
   kGpuBindingCount = 6,
 };
 
-// The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; vec4 row[3]; }`.
+// The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; }`.
 static_assert(std::is_standard_layout_v<Tet>);
-static_assert(sizeof(Tet) == 80 && alignof(Tet) == 16, "TetraprobeTet: 80 bytes, std430 array stride 80");
-static_assert(offsetof(Tet, v) == 0 && offsetof(Tet, n) == 16 && offsetof(Tet, row) == 32, "TetraprobeTet");
+static_assert(sizeof(Tet) == 32 && alignof(Tet) == 16, "TetraprobeTet: 32 bytes, std430 array stride 32");
+static_assert(offsetof(Tet, v) == 0 && offsetof(Tet, n) == 16, "TetraprobeTet");
 
-// The SH buffer holds tetraprobe::ShRgb as is: 27 floats per probe, coefficient-major then r,g,b
-// (float index 27 * probe + 3 * coefficient + channel).
+// The probe buffer (uint data[], read as float bits): Level::probes as is (3 floats per probe, x y z, local
+// frame) from index 0, then Level::sh as is from index 3 * probes (tetraprobeProbeCount of the grid header):
+// 27 floats per probe, coefficient-major then r,g,b (index 3 * probes + 27 * probe + 3 * coefficient + channel).
+inline constexpr int kGpuPositionFloatsPerProbe = 3;
 inline constexpr int kGpuShFloatsPerProbe = 27;
 static_assert(sizeof(ShRgb) == kGpuShFloatsPerProbe * sizeof(float),
               "TetraprobeSh: 27 packed floats a probe");

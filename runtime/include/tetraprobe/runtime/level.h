@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/occlusion_data.h"
@@ -29,17 +30,29 @@ enum ProbeContent : uint32_t {
   kContentAll = kContentDefault | kContentDirectPunctual,
 };
 
-// One tetrahedron, laid out exactly as the GPU reads it (std430, 80 bytes; mirrored in
+// One tetrahedron, laid out exactly as the GPU reads it (std430, 32 bytes; mirrored in
 // shaders/tetraprobe_layout.glsl).
 // - v[i]: probe indices. n[i]: the tet across the face opposite v[i], or -1 on the hull.
-// - Barycentrics of a local-space point X: w_i = dot(row[i].xyz, X) + row[i].w for i = 0..2, w_3 = 1 - sum.
-//   (row = inverse of [P0-P3 | P1-P3 | P2-P3], with row[i].w = -(M P3)_i folded in.)
+// - No barycentric rows are stored (they were 48 of 80 bytes): the weights come from the four probe
+//   positions, in double on the CPU (ProbeQuery) and in float through baryFrame() for occlusion and on the GPU.
 struct alignas(16) Tet {
   int32_t v[4];
   int32_t n[4];
-  float row[3][4];
 };
-static_assert(sizeof(Tet) == 80, "Tet is 80 bytes in std430");
+static_assert(sizeof(Tet) == 32, "Tet is 32 bytes in std430");
+
+// The barycentric frame of a tet in float, from its probe positions (local frame): w_i = dot(grad[i], X -
+// origin) for i = 0..2, w_3 = 1 - w_0 - w_1 - w_2, with origin = P3 and grad[i] the rows of the inverse of
+// [P0-P3 | P1-P3 | P2-P3] (the gradients of w_i, 1/metres). Computed operation for operation as the GLSL's
+// tetraprobeBaryFrame, so CPU occlusion and GPU occlusion see the same weights. A tet flat in float gives
+// non-finite gradients (callers treat the weights as they would any non-finite input).
+struct BaryFrame {
+  glm::vec3 origin{0.0f};
+  glm::vec3 grad[3] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
+};
+BaryFrame baryFrame(const Tet& t, const std::vector<glm::vec3>& probes);
+// Raw weights of local point x in the frame (may be negative outside; float, as the GPU).
+glm::vec4 baryWeights(const BaryFrame& f, const glm::vec3& x);
 
 // One outer cell: a hull triangle extruded along unit vertex normals, covering the space outside the hull
 // beyond it (runtime/outer_cells.h). Laid out as the GPU reads it (std430, 80 bytes; mirrored in

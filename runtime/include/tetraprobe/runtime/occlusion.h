@@ -5,14 +5,14 @@
 // selection rule in docs/occlusion.md.
 //
 // Everything is evaluated in the tet's barycentric frame: the weights w (w_i of probe tet.v[i], from the
-// Tet rows of level.h) are all the data a lookup needs besides the records below, so the GPU evaluates it
+// tet's float BaryFrame of level.h, computed from its probe positions as the GPU does) are all the data a lookup needs besides the records below, so the GPU evaluates it
 // with the weights it already has. Records are flat, fixed-size and pointer-free (std430-ready):
 //   TetOcclusion   8 bytes per tet   (uvec2)
 //   OcclusionPlane 16 bytes per plane (vec4)
 //   shadow maps    64 bytes per tet that has them (4 probes x 16 bytes: 15 lattice depths + 1 pad; uint[16])
 //
 // Bias (surfaces must not shadow themselves): a shading point with normal n is moved along n by
-//   delta = kOcclusionBias / max_i |grad(w_i) . n|   (grad w_i = row[i].xyz, grad w_3 = -sum of the others)
+//   delta = kOcclusionBias / max_i |grad(w_i) . n|   (grad w_i = BaryFrame::grad[i], grad w_3 = -sum of the others)
 // i.e. no barycentric coordinate changes by more than kOcclusionBias (3 % of the tet's extent along n).
 // A zero normal (volumes, dynamic objects) means no bias.
 //
@@ -54,14 +54,15 @@ glm::vec2 shadowMapCellCentre(int cell);
 float shadowMapDepth(const uint8_t* probeTexels, float u, float v);
 
 // Barycentric weights moved by the bias rule above for unit or non-unit normal n (zero: unchanged).
-glm::vec4 biasWeights(const Tet& tet, const glm::vec4& weights, const glm::vec3& normal);
+// `frame`: the tet's baryFrame (level.h), whose gradients the rule uses.
+glm::vec4 biasWeights(const BaryFrame& frame, const glm::vec4& weights, const glm::vec3& normal);
 
 // The single-tet kernel (what the GLSL mirrors). `planes` points at the tet's first plane, `shadowMap` at
 // its 64-byte block (either may be null when the kind does not use it). `weights` are the raw barycentric
 // weights of the point (may be slightly outside [0,1]); `normal` as in biasWeights. Returns per-probe
 // visibility in [0, 1] (1 = visible) for tet.v[0..3].
 glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* planes,
-                               const uint8_t* shadowMap, const Tet& tet, const glm::vec4& weights,
+                               const uint8_t* shadowMap, const BaryFrame& frame, const glm::vec4& weights,
                                const glm::vec3& normal);
 
 // Per-probe visibility of tet.v[0..3] seen from local-frame point `local` (metres, relative to level.origin)
@@ -70,6 +71,11 @@ glm::vec4 evaluateTetOcclusion(const TetOcclusion& rec, const OcclusionPlane* pl
 // Never throws; finite for finite input.
 glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec3& local, const glm::vec3& normal);
+
+// The same with the tet's frame given (`frame` must be baryFrame(level.tets[tet], level.probes)), for callers
+// shading many points of one tet (ProbeQuery::irradianceBatch): the same result, bit for bit.
+glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
+                              const BaryFrame& frame, const glm::vec3& local, const glm::vec3& normal);
 
 // Weights after occlusion: weights * visibility, renormalized to sum to 1. Non-finite or negative weights
 // count as 0 and the rest are renormalized first (none left: 0.25 each); visibility is clamped to [0, 1],

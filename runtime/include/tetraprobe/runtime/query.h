@@ -112,7 +112,9 @@ class ProbeQuery {
   Location walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const;
   Location outerScan(const glm::dvec3& x, const Location& fallback) const;
   int32_t startTet(const glm::dvec3& x, int32_t leafTet) const;
-  glm::vec3 shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal) const;
+  // `frameTet`/`frame` (optional): a cache of the last occluded tet's BaryFrame (irradianceBatch).
+  glm::vec3 shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal,
+                  int32_t* frameTet = nullptr, BaryFrame* frame = nullptr) const;
   void batchRange(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t begin,
                   size_t end) const;
 

@@ -50,9 +50,9 @@ struct TetGenResult {
 };
 TetGenResult tetrahedralizeTetGen(const std::vector<glm::dvec3>& points, const TetGenOptions& options = {});
 
-// Runtime tet records (tetraprobe::Tet, barycentric rows computed in double) with positions taken relative
-// to `origin`. One record per mesh tet, same order. Throws InputError naming the tet and its probes when its
-// rows are not finite in float, or when two of its probes collapse to one float position once taken
+// Runtime tet records (tetraprobe::Tet: probes and neighbours; the runtime derives weights from the probe
+// positions) with positions taken relative to `origin`. One record per mesh tet, same order. Throws
+// InputError naming the tet and its probes when its volume is zero or not finite in double, or when two of its probes collapse to one float position once taken
 // relative to `origin` (glm::vec3(point - origin), as Level::probes stores them): near-duplicates such as
 // 1e-9 m apart at 1 m from `origin` or 1 cm apart at 1000 km. The runtime's exact weights come from those
 // float positions, so such a tet would get equal weights (query.h). Tets flat or inverted in float without a
