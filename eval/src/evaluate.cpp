@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <utility>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
@@ -79,6 +81,48 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
            std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
   report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
   report.referenceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
+                          const std::vector<StoredReference>& stored) {
+  if (options.sampling == EvalSampling::kCameras && options.cameras.empty())
+    throw InputError("eval: camera sampling needs at least one camera (the scene names none)");
+  EvalReport report;
+  report.sampling = options.sampling;
+  report.samplesPerPoint = options.samplesPerPoint;
+  report.referenceBounces = options.referenceBounces;
+  const std::vector<SurfacePoint> surface =
+      options.sampling == EvalSampling::kCameras
+          ? sampleCameraPoints(tracer, options.cameras, options.points, options.seed)
+          : sampleSurfacePoints(tracer, options.points, options.seed);
+  const std::string set = evalSamplingName(options.sampling);
+  if (surface.size() != stored.size())
+    throw InputError("eval: the stored references hold " + std::to_string(stored.size()) + " " + set +
+                     " points, the sampling draws " + std::to_string(surface.size()) +
+                     " (another scene, --points or --seed?)");
+  report.points.resize(surface.size());
+  for (size_t i = 0; i < surface.size(); ++i) {
+    const StoredReference& s = stored[i];
+    const double tol = 1e-4 + 1e-6 * glm::length(surface[i].position);
+    if (glm::length(surface[i].position - s.position) > tol ||
+        glm::length(surface[i].normal - s.normal) > 1e-4f)
+      throw InputError("eval: stored " + set + " reference point " + std::to_string(i) +
+                       " is not the point the sampling draws (another scene, --points or --seed?)");
+    EvalPoint& p = report.points[i];
+    p.surface = surface[i];
+    p.reference.irradiance = s.irradiance;
+    p.reference.stderror = s.stderror;
+    p.reference.samples = options.samplesPerPoint;
+    p.direct = s.direct;
+    p.indirectOnly = luminance(p.direct) < kIndirectOnlyFraction * luminance(p.reference.irradiance);
+    report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
+  }
+  double sum = 0.0;
+  for (const auto& p : report.points)
+    sum += luminance(p.reference.stderror) /
+           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
+  report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
   return report;
 }
 

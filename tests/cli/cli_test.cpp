@@ -579,3 +579,32 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
         "\"gpu_ms\"", "\"bytes_sections\"", "\"cell_grid\"", "\"outer_cells\"", "\"bytes_per_probe\""})
     EXPECT_NE(json.find(key), std::string::npos) << "no key " << key;
 }
+
+// --reference-in scores against the references an earlier --points-out wrote: the same figures as the run that
+// traced them (the CSV's 7 digits change no reported digit here), and a file drawn with another seed is
+// refused (exit 2, naming the mismatch) rather than scored against the wrong points.
+TEST_F(Cli, EvalReferenceInReproducesTheTracedRunAndRefusesOtherPoints) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
+                          " --samples 16 --noise 0 --threads 2");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  const std::string base = "eval " + path("box.obj").string() + " " + path("l.tpb").string() +
+                           " --points 32 --samples 16 --grid none --gpu none --timing-size 16x9";
+  const CliRun traced = run(base + " --points-out " + path("pts.csv").string());
+  ASSERT_EQ(traced.code, 0) << traced.err;
+  const CliRun reused = run(base + " --reference-in " + path("pts.csv").string());
+  ASSERT_EQ(reused.code, 0) << reused.err;
+  // The method rows (name + the error columns) must agree; the timing columns differ run to run.
+  auto errorColumns = [](const std::string& out, const std::string& method) {
+    const size_t at = out.find("\n  " + method + " ");
+    return at == std::string::npos ? std::string() : out.substr(at, 70);
+  };
+  for (const char* m : {"tet", "nearest"}) {
+    EXPECT_FALSE(errorColumns(traced.out, m).empty()) << m << "\n" << traced.out;
+    EXPECT_EQ(errorColumns(traced.out, m), errorColumns(reused.out, m)) << m;
+  }
+  const CliRun other = run(base + " --seed 7 --reference-in " + path("pts.csv").string());
+  EXPECT_EQ(other.code, 2);
+  EXPECT_NE(other.err.find("reference point"), std::string::npos) << other.err;
+}

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -29,6 +31,44 @@ namespace {
 
 constexpr const char* kGridEqualBytes = "grid (equal bytes)";
 constexpr const char* kGridProbeCount = "grid (probe count)";
+
+// The rows of an `eval --points-out` file by point set ("cameras", "area"): position, normal, reference,
+// stderr and direct part (the lookup columns after them are ignored).
+std::map<std::string, std::vector<StoredReference>> readStoredReferences(const std::string& path) {
+  std::vector<char> bytes;
+  std::string error;
+  if (!readFile(path, bytes, &error)) throw InputError("--reference-in: " + error);
+  std::istringstream in(std::string(bytes.begin(), bytes.end()));
+  std::string line;
+  const std::string header =
+      "set,x,y,z,nx,ny,nz,ref_r,ref_g,ref_b,stderr_r,stderr_g,stderr_b,direct_r,direct_g,direct_b";
+  if (!std::getline(in, line) || line.compare(0, header.size(), header) != 0)
+    throw InputError("--reference-in: " + path + " is not an `eval --points-out` file (header)");
+  std::map<std::string, std::vector<StoredReference>> sets;
+  for (int row = 2; std::getline(in, line); ++row) {
+    if (line.empty()) continue;
+    std::istringstream fields(line);
+    std::string set, cell;
+    std::getline(fields, set, ',');
+    double v[15];
+    for (double& x : v) {
+      if (!std::getline(fields, cell, ',')) cell.clear();
+      char* end = nullptr;
+      x = std::strtod(cell.c_str(), &end);
+      if (cell.empty() || *end != '\0' || !std::isfinite(x))
+        throw InputError("--reference-in: " + path + " line " + std::to_string(row) + ": bad number '" +
+                         cell + "'");
+    }
+    StoredReference r;
+    r.position = glm::dvec3(v[0], v[1], v[2]);
+    r.normal = glm::vec3(float(v[3]), float(v[4]), float(v[5]));
+    r.irradiance = glm::vec3(float(v[6]), float(v[7]), float(v[8]));
+    r.stderror = glm::vec3(float(v[9]), float(v[10]), float(v[11]));
+    r.direct = glm::vec3(float(v[12]), float(v[13]), float(v[14]));
+    sets[set].push_back(r);
+  }
+  return sets;
+}
 
 double luminanceOf(const glm::vec3& c) {
   return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
@@ -312,7 +352,10 @@ int cmdEval(int argc, char** argv) {
         ""},
        {"--report", "", "FILE.json", "write the figures as JSON", ""},
        {"--points-out", "", "FILE.csv",
-        "write every point: position, normal, reference, stderr, direct part of the reference, lookups",
+        "write every point: position, normal, reference, stderr, direct part of the reference, lookups", ""},
+       {"--reference-in", "", "FILE.csv",
+        "take the references from an earlier run's --points-out (same scene, --points, --seed, --sampling "
+        "and --samples) instead of tracing them again; points that do not match are refused",
         ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
@@ -375,9 +418,20 @@ int cmdEval(int argc, char** argv) {
   }
 
   std::vector<EvalReport> reports;
+  const std::map<std::string, std::vector<StoredReference>> storedRefs =
+      args.has("--reference-in") ? readStoredReferences(args.str("--reference-in"))
+                                 : std::map<std::string, std::vector<StoredReference>>{};
   for (const EvalSampling set : sets) {
     opt.sampling = set;
-    reports.push_back(computeReference(tracer, level->content, opt));
+    if (!args.has("--reference-in")) {
+      reports.push_back(computeReference(tracer, level->content, opt));
+      continue;
+    }
+    const auto it = storedRefs.find(evalSamplingName(set));
+    if (it == storedRefs.end())
+      throw InputError("--reference-in: " + args.str("--reference-in") + " holds no '" +
+                       evalSamplingName(set) + "' points (give --sampling to match the run that wrote it)");
+    reports.push_back(reuseReference(tracer, opt, it->second));
   }
 
   const LevelUnderTest lut = prepareLevel(level, setup);

@@ -149,6 +149,20 @@ const char* evalSamplingName(EvalSampling sampling);
 // kCameras without cameras.
 EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options);
 
+// One point's reference as `eval --points-out` wrote it (to score new levels without re-tracing).
+struct StoredReference {
+  glm::dvec3 position{0.0};
+  glm::vec3 normal{0.0f}, irradiance{0.0f}, stderror{0.0f}, direct{0.0f};
+};
+
+// As computeReference, but the references come from `stored` (the rows of one point set, in order) instead
+// of being traced: the points are drawn again with options' seed and sampling, and each must match its row
+// (position within 1e-4 m + 1e-6 relative, normal within 1e-4: the CSV keeps 7 digits), so a file from
+// another scene, seed, point count or sampling is refused with InputError naming the first mismatch.
+// samplesPerPoint is reported as given (the caller states the count the file was traced with).
+EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
+                          const std::vector<StoredReference>& stored);
+
 // Scores one method against the report's references and appends it to report.methods (name, bytes,
 // sections, probes, the error measures of the header and cpuNsPerQuery; the other timings stay 0).
 void scoreMethod(EvalReport& report, const LookupMethod& method);
