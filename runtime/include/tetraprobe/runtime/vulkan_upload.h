@@ -1,9 +1,10 @@
 // Vulkan upload of a loaded level: the five storage buffers shaders/tetraprobe.glsl reads, and the
 // descriptor-set plumbing for them. Permissive: Vulkan, GLM and the standard library only.
 //
-// Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written once through a
-// mapping (no staging copy yet; on a discrete GPU the shader then reads over the bus; a later version may add
-// a staging upload to DEVICE_LOCAL memory). Errors are returned as VkResult (no exceptions), with a one-line
+// Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written through a mapping
+// at upload (no staging copy yet; on a discrete GPU the shader then reads over the bus; a later version may
+// add a staging upload to DEVICE_LOCAL memory). Usage STORAGE | TRANSFER_DST: run-time SH updates (below)
+// write the probe buffer in place, by mapping or vkCmdUpdateBuffer. Errors are returned as VkResult (no exceptions), with a one-line
 // message when `error` is given.
 #pragma once
 
@@ -74,9 +75,9 @@ VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const 
 // cmdUpdateLevelSh records the same copy into `cmd` (vkCmdUpdateBuffer, at most 65536 bytes each, so the SH
 // are copied into the command buffer when recorded, 108 bytes a probe: meant for updates of up to some
 // thousands of probes a frame; larger ones are better served by writeLevelSh), between two barriers: reads by
-// `shaderStages` recorded or submitted earlier finish before the transfer writes (no write-after-read race
-// with frames in flight), and the writes are visible to reads by `shaderStages` recorded or submitted after
-// (TRANSFER_WRITE -> SHADER_READ). Must be recorded outside a render pass. Returns false (nothing recorded,
+// `shaderStages` recorded or submitted earlier to the same queue finish before the transfer writes (no
+// write-after-read race with frames in flight), and the writes are visible to reads by `shaderStages`
+// recorded or submitted after (TRANSFER_WRITE -> SHADER_READ). Other queues need the engine's semaphores. Must be recorded outside a render pass. Returns false (nothing recorded,
 // `error` set) on the same range and size checks as writeLevelSh; count 0 records nothing.
 bool cmdUpdateLevelSh(VkCommandBuffer cmd, const VulkanLevelBuffers& buffers, const Level& level,
                       size_t first, size_t count, VkPipelineStageFlags shaderStages,
