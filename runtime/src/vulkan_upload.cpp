@@ -35,7 +35,8 @@ VkResult createFilledBuffer(VkPhysicalDevice physicalDevice, VkDevice device, co
                             VkDeviceSize size, VkBuffer* buffer, VkDeviceMemory* memory, std::string* what) {
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = size;
-  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  // TRANSFER_DST: cmdUpdateLevelSh (vulkan_sh_update.cpp) writes the SH with vkCmdUpdateBuffer.
+  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VkResult r = vkCreateBuffer(device, &info, nullptr, buffer);
   if (r != VK_SUCCESS) return *what = "vkCreateBuffer failed", r;

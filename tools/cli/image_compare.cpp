@@ -40,22 +40,47 @@ ImageDiff compareImages(const Rgb8Image& a, const Rgb8Image& b, int tolerance) {
                      " vs " + std::to_string(b.width) + "x" + std::to_string(b.height));
   ImageDiff d;
   d.visual = a;
-  const size_t pixels = size_t(a.width) * size_t(a.height);
-  uint64_t sum = 0, over = 0;
-  for (size_t p = 0; p < pixels; ++p) {
-    int worst = 0;
-    for (int c = 0; c < 3; ++c) {
-      const int diff = std::abs(int(a.rgb[3 * p + c]) - int(b.rgb[3 * p + c]));
-      sum += uint64_t(diff);
-      worst = std::max(worst, diff);
-      d.visual.rgb[3 * p + c] = uint8_t(std::min(255, a.rgb[3 * p + c] / 4 + diff * 8));
+  const size_t w = size_t(a.width), h = size_t(a.height), pixels = w * h;
+  uint64_t sum = 0, over = 0, changed = 0;
+  // integral[(y) * (w + 1) + x]: pixels over the tolerance in rows < y, columns < x.
+  std::vector<uint32_t> integral((w + 1) * (h + 1), 0);
+  for (size_t y = 0; y < h; ++y) {
+    uint32_t row = 0;
+    for (size_t x = 0; x < w; ++x) {
+      const size_t p = y * w + x;
+      int worst = 0;
+      for (int c = 0; c < 3; ++c) {
+        const int diff = std::abs(int(a.rgb[3 * p + c]) - int(b.rgb[3 * p + c]));
+        sum += uint64_t(diff);
+        worst = std::max(worst, diff);
+        d.visual.rgb[3 * p + c] = uint8_t(std::min(255, a.rgb[3 * p + c] / 4 + diff * 8));
+      }
+      d.maxAbs = std::max(d.maxAbs, worst);
+      over += worst > tolerance;
+      changed += worst > 0;
+      row += worst > tolerance;
+      integral[(y + 1) * (w + 1) + x + 1] = integral[y * (w + 1) + x + 1] + row;
     }
-    d.maxAbs = std::max(d.maxAbs, worst);
-    over += worst > tolerance;
   }
+  const auto count = [&](size_t x0, size_t y0, size_t x1, size_t y1) {  // [x0, x1) x [y0, y1)
+    return integral[y1 * (w + 1) + x1] - integral[y0 * (w + 1) + x1] - integral[y1 * (w + 1) + x0] +
+           integral[y0 * (w + 1) + x0];
+  };
+  for (size_t y = 0; y < h; y += kDiffWindowStride)
+    for (size_t x = 0; x < w; x += kDiffWindowStride) {
+      const size_t x1 = std::min(w, x + kDiffWindow), y1 = std::min(h, y + kDiffWindow);
+      d.worstWindowFraction =
+          std::max(d.worstWindowFraction, double(count(x, y, x1, y1)) / double((x1 - x) * (y1 - y)));
+    }
   d.meanAbs = pixels ? double(sum) / double(3 * pixels) : 0.0;
   d.fractionOver = pixels ? double(over) / double(pixels) : 0.0;
+  d.fractionChanged = pixels ? double(changed) / double(pixels) : 0.0;
   return d;
+}
+
+bool imagesMatch(const ImageDiff& d, const DiffThresholds& t) {
+  return d.fractionOver <= t.maxFraction && d.worstWindowFraction <= t.maxWindow &&
+         d.fractionChanged <= t.maxChanged;
 }
 
 namespace {

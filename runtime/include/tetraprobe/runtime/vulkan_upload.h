@@ -1,9 +1,10 @@
 // Vulkan upload of a loaded level: the five storage buffers shaders/tetraprobe.glsl reads, and the
 // descriptor-set plumbing for them. Permissive: Vulkan, GLM and the standard library only.
 //
-// Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written once through a
-// mapping (no staging copy yet; on a discrete GPU the shader then reads over the bus; a later version may add
-// a staging upload to DEVICE_LOCAL memory). Errors are returned as VkResult (no exceptions), with a one-line
+// Memory: each buffer lives in its own HOST_VISIBLE | HOST_COHERENT allocation, written through a mapping
+// at upload (no staging copy yet; on a discrete GPU the shader then reads over the bus; a later version may
+// add a staging upload to DEVICE_LOCAL memory). Usage STORAGE | TRANSFER_DST: run-time SH updates (below)
+// write the probe buffer in place, by mapping or vkCmdUpdateBuffer. Errors are returned as VkResult (no exceptions), with a one-line
 // message when `error` is given.
 #pragma once
 
@@ -55,5 +56,31 @@ void levelDescriptorBindings(VkShaderStageFlags stages, uint32_t firstBinding,
 // Points bindings firstBinding + 0..4 of `set` at the buffers (one vkUpdateDescriptorSets call).
 void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstBinding,
                            const VulkanLevelBuffers& buffers);
+
+// Run-time SH updates of an uploaded level (after setProbeSh, probe_update.h, on the CPU copy): both copy
+// level.sh[first, first + count) into the probe buffer (binding + 1) at the offsets gpu_layout.h gives (floats
+// 3 * probes + 27 * probe ...), nothing else. `level` must be the level `buffers` were uploaded from (same
+// probe count; checked against the buffer size). Lookups that read the buffer afterwards see the new SH,
+// bit-identical to an upload of a level holding them (tests/render/test_sh_update.cpp).
+//
+// writeLevelSh writes through a mapping of the buffer's host-visible coherent memory, at once, on the calling
+// thread. Sync contract: no submitted work that reads `buffers` may still be executing (wait for its fence,
+// or vkQueueWaitIdle); then no flush and no barrier are needed, since a vkQueueSubmit made after the call
+// makes host writes to coherent memory visible to the device. The memory must not be mapped elsewhere.
+// Returns VK_ERROR_INITIALIZATION_FAILED (nothing written) when the range lies outside the level or the
+// buffer is too small for the level, or vkMapMemory's error; `error` gets one line.
+VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const Level& level, size_t first,
+                      size_t count, std::string* error = nullptr);
+
+// cmdUpdateLevelSh records the same copy into `cmd` (vkCmdUpdateBuffer, at most 65536 bytes each, so the SH
+// are copied into the command buffer when recorded, 108 bytes a probe: meant for updates of up to some
+// thousands of probes a frame; larger ones are better served by writeLevelSh), between two barriers: reads by
+// `shaderStages` recorded or submitted earlier to the same queue finish before the transfer writes (no
+// write-after-read race with frames in flight), and the writes are visible to reads by `shaderStages`
+// recorded or submitted after (TRANSFER_WRITE -> SHADER_READ). Other queues need the engine's semaphores. Must be recorded outside a render pass. Returns false (nothing recorded,
+// `error` set) on the same range and size checks as writeLevelSh; count 0 records nothing.
+bool cmdUpdateLevelSh(VkCommandBuffer cmd, const VulkanLevelBuffers& buffers, const Level& level,
+                      size_t first, size_t count, VkPipelineStageFlags shaderStages,
+                      std::string* error = nullptr);
 
 }  // namespace tetraprobe

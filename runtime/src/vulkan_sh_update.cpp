@@ -1,0 +1,88 @@
+// Run-time SH updates of an uploaded level's probe buffer (vulkan_upload.h): a mapped write for an idle
+// buffer, and a recorded vkCmdUpdateBuffer between two barriers for frames in flight. Both copy Level::sh as
+// uploadLevelBuffers laid it out (gpu_layout.h): positions first, then 27 floats a probe.
+#include "tetraprobe/runtime/vulkan_upload.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+namespace tetraprobe {
+namespace {
+
+constexpr VkDeviceSize kShBytes = sizeof(ShRgb);
+constexpr VkDeviceSize kUpdateChunk = 65536;  // vkCmdUpdateBuffer's limit on dataSize
+
+// Checks the range against the level and the level against the buffer; sets `offset` to the first byte.
+bool checkRange(const VulkanLevelBuffers& buffers, const Level& level, size_t first, size_t count,
+                VkDeviceSize* offset, std::string* error) {
+  const size_t probes = level.probes.size();
+  if (level.sh.size() != probes || first > probes || count > probes - first) {
+    if (error)
+      *error = "SH update of probes [" + std::to_string(first) + ", " + std::to_string(first) + " + " +
+               std::to_string(count) + ") outside the level's " + std::to_string(level.sh.size()) + " SH";
+    return false;
+  }
+  const VkDeviceSize needed = VkDeviceSize(probes) * (kGpuPositionFloatsPerProbe * sizeof(float) + kShBytes);
+  if (buffers.buffers[kGpuBindingProbes] == VK_NULL_HANDLE || buffers.sizes[kGpuBindingProbes] < needed) {
+    if (error)
+      *error = "probe buffer of " + std::to_string(buffers.sizes[kGpuBindingProbes]) + " bytes cannot hold " +
+               std::to_string(probes) + " probes (upload this level first)";
+    return false;
+  }
+  *offset =
+      VkDeviceSize(probes) * kGpuPositionFloatsPerProbe * sizeof(float) + VkDeviceSize(first) * kShBytes;
+  return true;
+}
+
+}  // namespace
+
+VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const Level& level, size_t first,
+                      size_t count, std::string* error) {
+  VkDeviceSize offset = 0;
+  if (!checkRange(buffers, level, first, count, &offset, error)) return VK_ERROR_INITIALIZATION_FAILED;
+  if (count == 0) return VK_SUCCESS;
+  void* mapped = nullptr;
+  const VkDeviceSize bytes = VkDeviceSize(count) * kShBytes;
+  const VkResult r = vkMapMemory(device, buffers.memory[kGpuBindingProbes], offset, bytes, 0, &mapped);
+  if (r != VK_SUCCESS) {
+    if (error) *error = "vkMapMemory of the probe buffer failed (VkResult " + std::to_string(r) + ")";
+    return r;
+  }
+  std::memcpy(mapped, level.sh.data() + first, size_t(bytes));
+  vkUnmapMemory(device, buffers.memory[kGpuBindingProbes]);
+  return VK_SUCCESS;
+}
+
+bool cmdUpdateLevelSh(VkCommandBuffer cmd, const VulkanLevelBuffers& buffers, const Level& level,
+                      size_t first, size_t count, VkPipelineStageFlags shaderStages, std::string* error) {
+  VkDeviceSize offset = 0;
+  if (!checkRange(buffers, level, first, count, &offset, error)) return false;
+  if (count == 0) return true;
+  const VkBuffer buffer = buffers.buffers[kGpuBindingProbes];
+  const VkDeviceSize bytes = VkDeviceSize(count) * kShBytes;
+
+  // Earlier shader reads before the transfer writes: an execution dependency suffices for write-after-read.
+  vkCmdPipelineBarrier(cmd, shaderStages, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 0,
+                       nullptr);
+  // Whole probes per chunk (108 bytes each, a multiple of 4 as vkCmdUpdateBuffer requires).
+  const VkDeviceSize chunk = kUpdateChunk / kShBytes * kShBytes;
+  const auto* src = reinterpret_cast<const char*>(level.sh.data() + first);
+  for (VkDeviceSize done = 0; done < bytes; done += chunk) {
+    const VkDeviceSize n = std::min(chunk, bytes - done);
+    vkCmdUpdateBuffer(cmd, buffer, offset + done, n, src + done);
+  }
+  VkBufferMemoryBarrier barrier{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+  barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  barrier.buffer = buffer;
+  barrier.offset = offset;
+  barrier.size = bytes;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, shaderStages, 0, 0, nullptr, 1, &barrier, 0,
+                       nullptr);
+  return true;
+}
+
+}  // namespace tetraprobe
