@@ -619,6 +619,25 @@ void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
   }
 }
 
+// tetraprobeBlendSh with three weight vectors in one pass over the probes' SH (each coefficient read once):
+// cw with w, cp with p, cu with u, each sum in tetraprobeBlendSh's order (the same bits).
+void tetraprobeBlendSh3(int t, vec4 w, vec4 p, vec4 u, out vec3 cw[9], out vec3 cp[9], out vec3 cu[9]) {
+  ivec4 v = tetraprobeTets[t].v;
+  for (int i = 0; i < 9; ++i) cw[i] = cp[i] = cu[i] = vec3(0.0);
+  for (int k = 0; k < 4; ++k) {
+    int base = 3 * tetraprobeProbeCount + 27 * v[k];
+    for (int i = 0; i < tetraprobeShCount; ++i) {
+      int o = base + 3 * i;
+      vec3 sh = uintBitsToFloat(
+          uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
+      precise vec3 sw = cw[i] + sh * w[k], sp = cp[i] + sh * p[k], su = cu[i] + sh * u[k];
+      cw[i] = sw;
+      cp[i] = sp;
+      cu[i] = su;
+    }
+  }
+}
+
 // --- occlusion: mirrors runtime/src/occlusion.cpp (evaluateTetOcclusion, biasWeights, applyOcclusion) ---
 const float TETRAPROBE_OCC_BIAS = 0.03, TETRAPROBE_OCC_PLANE_HALF = 0.02, TETRAPROBE_OCC_SHADOW_HALF = 0.01,
             TETRAPROBE_OCC_FALLBACK = 1e-2;
@@ -769,25 +788,29 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
   if (loc.tet < 0) return vec3(0.0);
   vec4 w = loc.weights;
-  float fallback = 0.0;
-  if ((tetraprobeUsePlanes || tetraprobeUseShadowMaps) &&
-      tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
-    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal), fallback);
   vec3 c[9];
-  tetraprobeBlendSh(loc.tet, w, c);
+  if (!(tetraprobeUsePlanes || tetraprobeUseShadowMaps)) {  // a variant without occlusion: one blend
+    tetraprobeBlendSh(loc.tet, w, c);
+    return tetraprobeShIrradianceVariant(c, normal);
+  }
+  float fallback = 0.0;
+  if (tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
+    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal), fallback);
+  // The all-occluded fallback's two blends (nearest-dominated p, unoccluded u) come from the same pass over
+  // the probes' SH as the occluded one (a GPU may run both sides of the branch below).
+  float unused;
+  vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
+  vec4 p = u * u;
+  p = p * p;
+  p = p * p;
+  float ps = p.x + p.y + p.z + p.w;
+  p = ps > 0.0 ? p / ps : u;
+  vec3 cp[9], cu[9];
+  tetraprobeBlendSh3(loc.tet, w, p, u, c, cp, cu);
   vec3 e = tetraprobeShIrradianceVariant(c, normal);
   if (fallback > 0.0) {
-    float unused;
-    vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
-    vec4 p = u * u;
-    p = p * p;
-    p = p * p;
-    float ps = p.x + p.y + p.z + p.w;
-    p = ps > 0.0 ? p / ps : u;
-    tetraprobeBlendSh(loc.tet, p, c);
-    vec3 nearest = tetraprobeShIrradianceVariant(c, normal);
-    tetraprobeBlendSh(loc.tet, u, c);
-    vec3 blend = tetraprobeShIrradianceVariant(c, normal);
+    vec3 nearest = tetraprobeShIrradianceVariant(cp, normal);
+    vec3 blend = tetraprobeShIrradianceVariant(cu, normal);
     e = (1.0 - fallback) * e + fallback * min(nearest, blend);
   }
   return e;
