@@ -10,7 +10,7 @@
 //   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
 //   the tet named by the sparse cell grid's BSP leaf holding localPos, which holds it but within rounding of
 //   a face (else, for an absent cell or empty leaf, the start-grid cell's tet; at most
-//   tetraprobeMaxWalkSteps), else a scan of every tet. Each step
+//   tetraprobeMaxWalkSteps). Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
