@@ -10,22 +10,29 @@
 //   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
 //   the tet named by the sparse cell grid's BSP leaf holding localPos, which holds it but within rounding of
 //   a face (else, for an absent cell or empty leaf, the start-grid cell's tet; at most
-//   tetraprobeMaxWalkSteps), else a scan of every tet. Each step
+//   tetraprobeMaxWalkSteps). Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
 //   face (neighbour -1; only when the point is beyond the face's plane) continues across the outer cells
 //   (runtime/outer_cells.h) to the one whose extruded hull triangle holds the point: a continuous answer
 //   outside the hull that does not depend on the hint (loc.outerCell names the cell). A cycle answers
-//   with the visited tet holding the point best, if within TETRAPROBE_CYCLE_ACCEPT_EPS. Define
-//   TETRAPROBE_NO_SCAN_FALLBACK to skip the O(tets) scan (the answer is then the walk's best tet, clamped).
-//   An empty level gives tet -1 and E = 0.
+//   with the visited tet holding the point best, if within TETRAPROBE_CYCLE_ACCEPT_EPS. A walk that fails
+//   (its step bound, or a cycle with no tet that close) answers with the visited tet holding the point best,
+//   clamped; an outer-cell walk that fails, with the visited cell holding it best. There is no O(tets) scan
+//   in what ships: TETRAPROBE_DEBUG_SCAN_FALLBACK (a debug build only) compiles the CPU's scans of every tet
+//   and outer cell in after a failed walk, to compare against. An empty level gives tet -1 and E = 0.
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
 //   rounding), outside too (the outer cells' answer does not depend on the hull face the walk leaves by).
 // - Bindings: the five read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
 //   TETRAPROBE_BINDING + 0..5 (defaults 0 and 0..5; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
 //   (runtime/vulkan_upload.h).
+// - Variants: five specialization constants, constant_id TETRAPROBE_SPEC_ID + 0..4 (default 0..4), turn off
+//   what a level does not use (SH band 2, plane or shadow-map occlusion, outer cells, the cell grid); the
+//   driver then compiles that code out. Unspecialized, everything is on (right for any level). Specialize
+//   with tetraprobe::shaderSpecialization(tetraprobe::shaderVariantFor(level, ...)) (runtime/vulkan_upload.h,
+//   runtime/shader_variant.h).
 // - Including: the shader that includes this file needs `#extension GL_GOOGLE_include_directive : require`
 //   (glslangValidator) or shaderc, with this folder on the include path (CMake target tetraprobe_shaders).
 #ifndef TETRAPROBE_GLSL
@@ -33,6 +40,16 @@
 
 #include "tetraprobe_layout.glsl"
 #include "tetraprobe_sh.glsl"
+
+// The shader variant (tetraprobe::ShaderSpecConstant, runtime/shader_variant.h; defaults: the generic one).
+#ifndef TETRAPROBE_SPEC_ID
+#define TETRAPROBE_SPEC_ID 0
+#endif
+layout(constant_id = TETRAPROBE_SPEC_ID + 0) const int tetraprobeShOrder = 2;  // 1: coefficients 0..3 only
+layout(constant_id = TETRAPROBE_SPEC_ID + 1) const bool tetraprobeUsePlanes = true;
+layout(constant_id = TETRAPROBE_SPEC_ID + 2) const bool tetraprobeUseShadowMaps = true;
+layout(constant_id = TETRAPROBE_SPEC_ID + 3) const bool tetraprobeUseOuterCells = true;
+layout(constant_id = TETRAPROBE_SPEC_ID + 4) const bool tetraprobeUseCellGrid = true;
 
 // The CPU query's constants (runtime/src/query.cpp: kInsideEps, kCycleAcceptEps, kMaxHintSteps).
 #ifndef TETRAPROBE_INSIDE_EPS
@@ -71,8 +88,8 @@ struct TetraprobeLocation {
 
 // Probe p's position (local frame, metres).
 vec3 tetraprobeProbePosition(int p) {
-  return uintBitsToFloat(uvec3(tetraprobeProbeData[3 * p], tetraprobeProbeData[3 * p + 1],
-                               tetraprobeProbeData[3 * p + 2]));
+  return uintBitsToFloat(
+      uvec3(tetraprobeProbeData[3 * p], tetraprobeProbeData[3 * p + 1], tetraprobeProbeData[3 * p + 2]));
 }
 
 // tetraprobe::BaryFrame (level.h): w_i = dot(g[i], X - origin) for i = 0..2, w_3 = 1 - the others, from the
@@ -180,7 +197,8 @@ int tetraprobeStartCellTet(vec3 p) {
   return tetraprobeStartTet[c.x + dims.x * (c.y + dims.y * c.z)];
 }
 
-// Every tet scanned: the one whose smallest weight is largest (ties: lowest index). The walk's fallback.
+#ifdef TETRAPROBE_DEBUG_SCAN_FALLBACK
+// Every tet scanned: the one whose smallest weight is largest (ties: lowest index). O(tets): debug only.
 TetraprobeLocation tetraprobeScanAll(vec3 x) {
   int best = -1;
   float bestMin = 0.0;
@@ -196,6 +214,7 @@ TetraprobeLocation tetraprobeScanAll(vec3 x) {
   }
   return tetraprobeFinish(best, bestW, bestMin >= -TETRAPROBE_INSIDE_EPS);
 }
+#endif
 
 // --- outer cells (runtime/outer_cells.h): the answer outside the hull ---------------------------------
 
@@ -367,7 +386,9 @@ TetraprobeLocation tetraprobeFinishOuter(int k, vec3 b) {
   return loc;
 }
 
-// Every outer cell with a root: the one whose smallest barycentric is largest (ties: lowest index).
+#ifdef TETRAPROBE_DEBUG_SCAN_FALLBACK
+// Every outer cell with a root: the one whose smallest barycentric is largest (ties: lowest index). O(cells):
+// debug only.
 bool tetraprobeOuterScan(vec3 x, out TetraprobeLocation loc) {
   int best = -1;
   float bestMin = 0.0;
@@ -385,13 +406,18 @@ bool tetraprobeOuterScan(vec3 x, out TetraprobeLocation loc) {
   if (best >= 0) loc = tetraprobeFinishOuter(best, bestB);
   return best >= 0;
 }
+#endif
 
 // ProbeQuery::outerLocate: walk the outer cells from `cur` across the edge opposite the most negative
-// barycentric to the cell whose extruded triangle holds x; a cycle, a missing link or the bound ends in the
-// scan (skipped with TETRAPROBE_NO_SCAN_FALLBACK: `loc` is kept).
+// barycentric to the cell whose extruded triangle holds x. A cycle, a missing link or the bound (where the
+// CPU scans every cell) answers with the visited cell with a root that holds x best, else keeps `loc` (the
+// clamped hull tet); with TETRAPROBE_DEBUG_SCAN_FALLBACK, the scan of every cell as on the CPU.
 void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
   int saved = cur;
   int power = 1, lam = 0;
+  int best = -1;
+  float bestMin = 0.0;
+  vec3 bestB = vec3(0.0);
   for (int step = 0; step < TETRAPROBE_MAX_OUTER_STEPS && cur >= 0; ++step) {
     bool valid;
     vec3 b = tetraprobeOuterWeights(cur, x, valid);
@@ -401,6 +427,11 @@ void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
       loc = tetraprobeFinishOuter(cur, b);
       return;
     }
+    if (valid && (best < 0 || b[m] > bestMin)) {
+      best = cur;
+      bestMin = b[m];
+      bestB = b;
+    }
     cur = tetraprobeOuterCells[cur].link[m];
     if (cur == saved) break;
     if (++lam == power) {
@@ -409,9 +440,11 @@ void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
       lam = 0;
     }
   }
-#ifndef TETRAPROBE_NO_SCAN_FALLBACK
+#ifdef TETRAPROBE_DEBUG_SCAN_FALLBACK
   TetraprobeLocation scanned;
   if (tetraprobeOuterScan(x, scanned)) loc = scanned;
+#else
+  if (best >= 0) loc = tetraprobeFinishOuter(best, bestB);
 #endif
 }
 
@@ -462,7 +495,7 @@ int tetraprobeCellStartTet(vec3 x) {
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
 // leave sliver faces' planes slightly apart) without any visited tet holding x within
 // TETRAPROBE_CYCLE_ACCEPT_EPS; a cycle otherwise answers with the visited tet holding x best. On false, `loc`
-// is that best visited tet, clamped (used only with TETRAPROBE_NO_SCAN_FALLBACK).
+// is that best visited tet, clamped (the shipping answer; the CPU scans instead).
 // When the walk leaves through a hull face, exitFace is that face (the point is beyond its plane).
 bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, out int exitFace) {
   exitFace = -1;
@@ -491,7 +524,7 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, o
     if (next < 0) {
       // A hull face: outside the hull if x is beyond its plane (from the probe positions; the rows cannot
       // tell within their rounding), else step across the most negative interior face, or stop here.
-      int cell = tetraprobeFindOuterCell(cur, m);
+      int cell = tetraprobeUseOuterCells ? tetraprobeFindOuterCell(cur, m) : -1;
       if (cell < 0 || tetraprobeBeyondHullFace(cell, x)) {
         loc = tetraprobeFinish(cur, w, false);
         exitFace = m;
@@ -537,36 +570,70 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
       tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) && exitFace < 0)
     return loc;
   // The cell grid's leaf names the start (the coarse start grid where the cell is absent).
-  int start = tetraprobeCellStartTet(x);
+  int start = tetraprobeUseCellGrid ? tetraprobeCellStartTet(x) : -1;
   if (start < 0) start = tetraprobeStartCellTet(x);
   bool walked = tetraprobeWalk(x, start, tetraprobeMaxWalkSteps, loc, exitFace);
   if (!walked) {
-#ifndef TETRAPROBE_NO_SCAN_FALLBACK
+    // The walk's best tet, clamped (loc). Never seen on the levels tested (docs/rendering.md#variants).
+#ifdef TETRAPROBE_DEBUG_SCAN_FALLBACK
     loc = tetraprobeScanAll(x);
     TetraprobeLocation outer;
     if (!loc.inside && tetraprobeOuterScan(x, outer)) loc = outer;
 #endif
     return loc;
   }
-  if (exitFace < 0) return loc;
+  if (exitFace < 0 || !tetraprobeUseOuterCells) return loc;
   // Outside the hull: continue across the outer cells from the face the walk left through.
   int cell = tetraprobeFindOuterCell(loc.tet, exitFace);
   if (cell >= 0) tetraprobeOuterLocate(x, cell, loc);
   return loc;
 }
 
-// Blends the 9 RGB coefficients of tet t's probes with weights w (probe 0 first, as shBlend does).
+// The coefficients the variant reads: 4 (L1) or 9 (L2).
+const int tetraprobeShCount = tetraprobeShOrder >= 2 ? 9 : 4;
+
+// tetraprobeShIrradiance (tetraprobe_sh.glsl) over the variant's coefficients: the same sum in the same
+// order, without the terms an L1 level holds as 0.
+vec3 tetraprobeShIrradianceVariant(vec3 c[9], vec3 n) {
+  precise float y[9];
+  TETRAPROBE_SH_BASIS(y, n);
+  precise vec3 e = vec3(0.0);
+  for (int i = 0; i < tetraprobeShCount; ++i) e += c[i] * (y[i] * tetraprobeShCosineLobe(i));
+  return e;
+}
+
+// Blends the RGB coefficients of tet t's probes with weights w (probe 0 first, as shBlend does): the first
+// tetraprobeShCount; the others are 0.
 void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
   ivec4 v = tetraprobeTets[t].v;
   for (int i = 0; i < 9; ++i) c[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
     int base = 3 * tetraprobeProbeCount + 27 * v[k];
-    for (int i = 0; i < 9; ++i) {
+    for (int i = 0; i < tetraprobeShCount; ++i) {
       int o = base + 3 * i;
       vec3 sh = uintBitsToFloat(
           uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
       precise vec3 s = c[i] + sh * w[k];
       c[i] = s;
+    }
+  }
+}
+
+// tetraprobeBlendSh with three weight vectors in one pass over the probes' SH (each coefficient read once):
+// cw with w, cp with p, cu with u, each sum in tetraprobeBlendSh's order (the same bits).
+void tetraprobeBlendSh3(int t, vec4 w, vec4 p, vec4 u, out vec3 cw[9], out vec3 cp[9], out vec3 cu[9]) {
+  ivec4 v = tetraprobeTets[t].v;
+  for (int i = 0; i < 9; ++i) cw[i] = cp[i] = cu[i] = vec3(0.0);
+  for (int k = 0; k < 4; ++k) {
+    int base = 3 * tetraprobeProbeCount + 27 * v[k];
+    for (int i = 0; i < tetraprobeShCount; ++i) {
+      int o = base + 3 * i;
+      vec3 sh = uintBitsToFloat(
+          uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
+      precise vec3 sw = cw[i] + sh * w[k], sp = cp[i] + sh * p[k], su = cu[i] + sh * u[k];
+      cw[i] = sw;
+      cp[i] = sp;
+      cu[i] = su;
     }
   }
 }
@@ -651,13 +718,13 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
   uint header = tetraprobeOccData[2u * uint(t)], cells = tetraprobeOccData[2u * uint(t) + 1u];
   uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
-  if (kind != 1u && kind != 2u) return vec4(1.0);
+  if (!(kind == 1u && tetraprobeUsePlanes) && !(kind == 2u && tetraprobeUseShadowMaps)) return vec4(1.0);
   TetraprobeBaryFrame frame = tetraprobeBaryFrame(t);
   vec4 w = tetraprobeBaryWeights(frame, x);
   if (isnan(n.x) || isnan(n.y) || isnan(n.z) || isinf(n.x) || isinf(n.y) || isinf(n.z)) n = vec3(0.0);
   w = tetraprobeOccBias(frame, w, n);
   vec4 vis = vec4(1.0);
-  if (kind == 1u) {
+  if (tetraprobeUsePlanes && kind == 1u) {
     if (count == 0u) return vec4(1.0);
     float s[3] = float[3](1.0, 1.0, 1.0);
     for (uint k = 0u; k < count; ++k) {
@@ -675,7 +742,7 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
       for (int i = 0; i < 4; ++i) acc[i] = acc[i] + ((((mask >> uint(i)) & 1u) != 0u) ? wt : 0.0);
     }
     vis = clamp(acc, 0.0, 1.0);
-  } else {
+  } else if (tetraprobeUseShadowMaps) {
     uint block = tetraprobeOccShadowOffset + 16u * offset;
     for (int i = 0; i < 4; ++i) {
       int j0 = i == 0 ? 1 : 0, j1 = i <= 1 ? 2 : 1, j2 = i <= 2 ? 3 : 2;
@@ -721,24 +788,29 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
   if (loc.tet < 0) return vec3(0.0);
   vec4 w = loc.weights;
+  vec3 c[9];
+  if (!(tetraprobeUsePlanes || tetraprobeUseShadowMaps)) {  // a variant without occlusion: one blend
+    tetraprobeBlendSh(loc.tet, w, c);
+    return tetraprobeShIrradianceVariant(c, normal);
+  }
   float fallback = 0.0;
   if (tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
     w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal), fallback);
-  vec3 c[9];
-  tetraprobeBlendSh(loc.tet, w, c);
-  vec3 e = tetraprobeShIrradiance(c, normal);
+  // The all-occluded fallback's two blends (nearest-dominated p, unoccluded u) come from the same pass over
+  // the probes' SH as the occluded one (a GPU may run both sides of the branch below).
+  float unused;
+  vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
+  vec4 p = u * u;
+  p = p * p;
+  p = p * p;
+  float ps = p.x + p.y + p.z + p.w;
+  p = ps > 0.0 ? p / ps : u;
+  vec3 cp[9], cu[9];
+  tetraprobeBlendSh3(loc.tet, w, p, u, c, cp, cu);
+  vec3 e = tetraprobeShIrradianceVariant(c, normal);
   if (fallback > 0.0) {
-    float unused;
-    vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
-    vec4 p = u * u;
-    p = p * p;
-    p = p * p;
-    float ps = p.x + p.y + p.z + p.w;
-    p = ps > 0.0 ? p / ps : u;
-    tetraprobeBlendSh(loc.tet, p, c);
-    vec3 nearest = tetraprobeShIrradiance(c, normal);
-    tetraprobeBlendSh(loc.tet, u, c);
-    vec3 blend = tetraprobeShIrradiance(c, normal);
+    vec3 nearest = tetraprobeShIrradianceVariant(cp, normal);
+    vec3 blend = tetraprobeShIrradianceVariant(cu, normal);
     e = (1.0 - fallback) * e + fallback * min(nearest, blend);
   }
   return e;

@@ -336,12 +336,13 @@ VkPipeline createDotsPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayo
 }
 
 VkPipeline createComputePipeline(VkDevice device, VkPipelineLayout layout, const uint32_t* code, size_t bytes,
-                                 CleanupStack& cleanup) {
+                                 CleanupStack& cleanup, const VkSpecializationInfo* specialization) {
   VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
   info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
   info.stage.module = createShader(device, code, bytes, cleanup);
   info.stage.pName = "main";
+  info.stage.pSpecializationInfo = specialization;
   info.layout = layout;
   VkPipeline pipeline;
   vkCheck(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline),

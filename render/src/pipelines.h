@@ -56,7 +56,8 @@ VkPipeline createShadowPipeline(VkDevice device, VkRenderPass pass, VkPipelineLa
 // writes, one colour output.
 VkPipeline createDotsPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, uint32_t width,
                               uint32_t height, VkCompareOp compare, CleanupStack& cleanup);
+// `specialization` (may be null): the shader's specialization constants.
 VkPipeline createComputePipeline(VkDevice device, VkPipelineLayout layout, const uint32_t* code, size_t bytes,
-                                 CleanupStack& cleanup);
+                                 CleanupStack& cleanup, const VkSpecializationInfo* specialization = nullptr);
 
 }  // namespace tetraprobe::render_detail

@@ -17,12 +17,15 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
 
+#include "ambient.comp.h"
 #include "debug_occlusion.comp.h"
 #include "debug_surface.comp.h"
 #include "debug_tets.comp.h"
 #include "direct.comp.h"
+#include "grid_texture.h"
 #include "lighting.comp.h"
 #include "lighting_grid.comp.h"
+#include "lighting_grid_texture.comp.h"
 #include "pipelines.h"
 #include "shadow_lights.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
@@ -41,7 +44,7 @@ using render_detail::vkCheck;
 using render_detail::VulkanContext;
 
 constexpr int kImageCount = 4;           // read back: color, position, normal, albedo
-constexpr uint32_t kMaxTimestamps = 16;  // two per pass
+constexpr uint32_t kMaxTimestamps = 64;  // two per pass
 
 // Push constants of every compute pass (lighting.comp reads the first 12 bytes).
 struct ComputePush {
@@ -243,6 +246,15 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     throw std::runtime_error("render: a grid renders irradiance or indirect only");
   if (options.shadowMapSize < 16 || options.shadowMapSize > 8192)
     throw std::runtime_error("render: shadowMapSize must be in 16..8192");
+  if (!level && (options.variant || options.lightingSpirv || !options.benchVariants.empty() ||
+                 options.benchAmbient || options.benchGrid))
+    throw std::runtime_error("render: shader variants and bench passes need a level");
+  if (options.benchVariants.size() > 16) throw std::runtime_error("render: at most 16 bench variants");
+  if (options.benchGrid &&
+      (options.benchGrid->dims.x < 2 || options.benchGrid->dims.y < 2 || options.benchGrid->dims.z < 2 ||
+       !options.benchGrid->sh || !(options.benchGrid->step > 0.0)))
+    throw std::runtime_error(
+        "render: a bench grid needs at least 2 nodes per axis, a positive step and its SH");
   if (options.warmupFrames < 0 || options.timedFrames < 1 ||
       options.warmupFrames + options.timedFrames > 1000)
     throw std::runtime_error("render: need warmupFrames >= 0, timedFrames >= 1 and at most 1000 frames");
@@ -381,7 +393,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
              "vkMapMemory (shadow matrices)");
 
   // Compute passes: set 0 = the level (vulkan_upload.h) or the grid, set 1 = the images (0 position,
-  // 1 normal, 2 albedo, 3 colour, 4 emission), set 2 = direct light (lights, layer matrices, shadow maps).
+  // 1 normal, 2 albedo, 3 colour, 4 emission), set 2 = direct light (lights, layer matrices, shadow maps),
+  // set 3 = the bench grid's textures and header.
   VkDescriptorSetLayoutBinding levelBindings[kGpuBindingCount];
   levelDescriptorBindings(VK_SHADER_STAGE_COMPUTE_BIT, 0, levelBindings);
   const uint32_t levelBindingCount = level ? uint32_t(kGpuBindingCount) : 1u;  // the grid: binding 0 only
@@ -393,20 +406,50 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
   const bool full = mode == RenderMode::kFull;
-  const VkDescriptorSetLayout setLayouts[3] = {
+  const VkDescriptorSetLayoutBinding gridBindings[2] = {
+      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, render_detail::kGridTextureCount,
+       VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
+  const VkDescriptorSetLayout setLayouts[4] = {
       render_detail::createSetLayout(device, levelBindings, levelBindingCount, cleanup),
       render_detail::createSetLayout(device, imageBindings, 5, cleanup),
-      render_detail::createSetLayout(device, directBindings, full ? 3u : 0u, cleanup)};
+      render_detail::createSetLayout(device, directBindings, full ? 3u : 0u, cleanup),
+      render_detail::createSetLayout(device, gridBindings, options.benchGrid ? 2u : 0u, cleanup)};
   const VkPipelineLayout computeLayout = render_detail::createPipelineLayout(
-      device, setLayouts, 3, VK_SHADER_STAGE_COMPUTE_BIT, sizeof(ComputePush), cleanup);
-  auto compute = [&](const uint32_t* code, size_t bytes) {
-    return render_detail::createComputePipeline(device, computeLayout, code, bytes, cleanup);
+      device, setLayouts, 4, VK_SHADER_STAGE_COMPUTE_BIT, sizeof(ComputePush), cleanup);
+  auto compute = [&](const uint32_t* code, size_t bytes, const VkSpecializationInfo* spec = nullptr) {
+    return render_detail::createComputePipeline(device, computeLayout, code, bytes, cleanup, spec);
+  };
+  // The lookup's variant (shader_variant.h): the level's own unless the options name one.
+  const ShaderVariant variant = !level ? kGenericShaderVariant
+                                : options.variant
+                                    ? *options.variant
+                                    : shaderVariantFor(*level, query->outerCells(), query->cellGrid());
+  const uint32_t* lightingCode = options.lightingSpirv ? options.lightingSpirv : kSpirv_lighting_comp;
+  const size_t lightingBytes =
+      options.lightingSpirv ? options.lightingSpirvBytes : sizeof(kSpirv_lighting_comp);
+  auto lookup = [&](const ShaderVariant& v) {
+    ShaderSpecialization spec;
+    shaderSpecialization(v, 0, spec);
+    return compute(lightingCode, lightingBytes, &spec.info);
   };
   VkPipeline lightingPipeline = VK_NULL_HANDLE, directPipeline = VK_NULL_HANDLE,
              debugPipeline = VK_NULL_HANDLE;
   if (usesLighting(mode))
-    lightingPipeline = level ? compute(kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp))
-                             : compute(kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp));
+    lightingPipeline =
+        level ? lookup(variant) : compute(kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp));
+  // Bench passes (levels only): the lookup in other variants, a constant, the grid from 3D textures.
+  std::vector<std::pair<std::string, VkPipeline>> benchPipelines;
+  for (const ShaderVariant& v : options.benchVariants)
+    benchPipelines.emplace_back("lookup:" + v.name(), lookup(v));
+  if (options.benchAmbient)
+    benchPipelines.emplace_back("ambient", compute(kSpirv_ambient_comp, sizeof(kSpirv_ambient_comp)));
+  render_detail::GridTextures gridTextures;
+  if (options.benchGrid) {
+    gridTextures = render_detail::createGridTextures(ctx, *options.benchGrid, origin, cleanup);
+    benchPipelines.emplace_back("grid_texture", compute(kSpirv_lighting_grid_texture_comp,
+                                                        sizeof(kSpirv_lighting_grid_texture_comp)));
+  }
   if (full) directPipeline = compute(kSpirv_direct_comp, sizeof(kSpirv_direct_comp));
   if (mode == RenderMode::kProbes)
     debugPipeline = compute(kSpirv_debug_surface_comp, sizeof(kSpirv_debug_surface_comp));
@@ -450,21 +493,22 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
 
   VkDescriptorPool descriptorPool;
   {
-    const VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 3},
-                                           {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 5},
-                                           {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
+    const VkDescriptorPoolSize sizes[3] = {
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 4},
+        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 5},
+        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1 + render_detail::kGridTextureCount}};
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    info.maxSets = 4;
+    info.maxSets = 5;
     info.poolSizeCount = 3;
     info.pPoolSizes = sizes;
     vkCheck(vkCreateDescriptorPool(device, &info, nullptr, &descriptorPool), "vkCreateDescriptorPool");
     cleanup.push([device, descriptorPool] { vkDestroyDescriptorPool(device, descriptorPool, nullptr); });
   }
-  VkDescriptorSet sets[3];
+  VkDescriptorSet sets[4];
   {
     VkDescriptorSetAllocateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     info.descriptorPool = descriptorPool;
-    info.descriptorSetCount = 3;
+    info.descriptorSetCount = 4;
     info.pSetLayouts = setLayouts;
     vkCheck(vkAllocateDescriptorSets(device, &info, sets), "vkAllocateDescriptorSets");
   }
@@ -519,6 +563,20 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
   }
   if (dots) writeBuffer(dotsSet, 0, probeBuffer.buffer);
+  if (options.benchGrid) {
+    VkDescriptorImageInfo infos[render_detail::kGridTextureCount];
+    for (int j = 0; j < render_detail::kGridTextureCount; ++j)
+      infos[j] = {gridTextures.sampler, gridTextures.images[j].view,
+                  VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = sets[3];
+    write.dstBinding = 0;
+    write.descriptorCount = render_detail::kGridTextureCount;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    write.pImageInfo = infos;
+    vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+    writeBuffer(sets[3], 1, gridTextures.header.buffer);
+  }
 
   VkQueryPool queryPool = VK_NULL_HANDLE;
   if (ctx.timestampPeriodNs() > 0) {
@@ -610,17 +668,18 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   const VkPipelineStageFlags anyStage = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT |
                                         VK_PIPELINE_STAGE_TRANSFER_BIT |
                                         VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-  auto dispatch = [&](VkPipeline pipeline, const char* pass, const ComputePush& p, uint32_t groupsX,
+  auto dispatch = [&](VkPipeline pipeline, const std::string& pass, const ComputePush& p, uint32_t groupsX,
                       uint32_t groupsY) {
     cmd = clock.begin();
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 3, sets, 0, nullptr);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 4, sets, 0, nullptr);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
     vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
     vkCmdDispatch(cmd, groupsX, groupsY, 1);
     memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, anyStage, VK_ACCESS_SHADER_WRITE_BIT, anyAccess);
-    clock.end(pass);
+    clock.end(pass.c_str());
   };
   const uint32_t groupsX = (width + 7) / 8, groupsY = (height + 7) / 8;
+  for (const auto& [name, pipeline] : benchPipelines) dispatch(pipeline, name, push, groupsX, groupsY);
   if (lightingPipeline != VK_NULL_HANDLE) {
     // Warm-up: one workgroup (pixel 0,0 only). lavapipe JIT-compiles a pipeline at its first dispatch; this
     // keeps that compile out of the timed full-screen pass of a single frame.
@@ -712,6 +771,12 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     vkCheck(vkMapMemory(device, readback[i].memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (readback)");
     std::memcpy(img.rgba.data(), mapped, img.rgba.size() * sizeof(float));
     vkUnmapMemory(device, readback[i].memory);
+  }
+  result.variant = variant;
+  result.deviceName = ctx.deviceName();
+  if (options.benchGrid) {
+    result.gridTextureFormat = gridTextures.format == VK_FORMAT_R32G32B32A32_SFLOAT ? "rgba32f" : "rgba16f";
+    result.gridTextureBytes = gridTextures.bytes;
   }
   RenderTimings& t = result.timings;
   t.warmupFrames = options.warmupFrames;

@@ -134,6 +134,7 @@ VulkanContext::VulkanContext() {
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(physical_, &props);
     if (families[queueFamily_].timestampValidBits > 0) timestampPeriodNs_ = props.limits.timestampPeriod;
+    deviceName_ = props.deviceName;
   } catch (...) {
     destroy();
     throw;
@@ -220,6 +221,40 @@ GpuImage VulkanContext::createImage(uint32_t width, uint32_t height, VkFormat fo
   vci.format = format;
   vci.subresourceRange = {aspect, 0, 1, 0, layers};
   vkCheck(vkCreateImageView(device_, &vci, nullptr, &im.view), "vkCreateImageView");
+  VkImageView view = im.view;
+  cleanup.push([dev, view] { vkDestroyImageView(dev, view, nullptr); });
+  return im;
+}
+
+GpuImage VulkanContext::createImage3D(uint32_t width, uint32_t height, uint32_t depth, VkFormat format,
+                                      VkImageUsageFlags usage, CleanupStack& cleanup) const {
+  GpuImage im;
+  VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.imageType = VK_IMAGE_TYPE_3D;
+  info.format = format;
+  info.extent = {width, height, depth};
+  info.mipLevels = 1;
+  info.arrayLayers = 1;
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  vkCheck(vkCreateImage(device_, &info, nullptr, &im.image), "vkCreateImage (3D)");
+  VkDevice dev = device_;
+  VkImage img = im.image;
+  cleanup.push([dev, img] { vkDestroyImage(dev, img, nullptr); });
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(device_, im.image, &req);
+  im.memory =
+      allocateMemory(req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, "vkAllocateMemory (3D image)", cleanup);
+  vkCheck(vkBindImageMemory(device_, im.image, im.memory, 0), "vkBindImageMemory (3D)");
+  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vci.image = im.image;
+  vci.viewType = VK_IMAGE_VIEW_TYPE_3D;
+  vci.format = format;
+  vci.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCheck(vkCreateImageView(device_, &vci, nullptr, &im.view), "vkCreateImageView (3D)");
   VkImageView view = im.view;
   cleanup.push([dev, view] { vkDestroyImageView(dev, view, nullptr); });
   return im;

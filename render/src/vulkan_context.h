@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -61,6 +62,7 @@ class VulkanContext {
   VkCommandPool commandPool() const { return pool_; }
   // Nanoseconds per timestamp tick, or 0 when the queue does not support timestamps.
   double timestampPeriodNs() const { return timestampPeriodNs_; }
+  const std::string& deviceName() const { return deviceName_; }
 
   // A buffer in memory with `props`; its destruction is pushed onto `cleanup`.
   GpuBuffer createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, VkMemoryPropertyFlags props,
@@ -69,6 +71,9 @@ class VulkanContext {
   // (2D for one layer, 2D array for more); destruction pushed.
   GpuImage createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
                        VkImageAspectFlags aspect, CleanupStack& cleanup, uint32_t layers = 1) const;
+  // A 3D colour image (one mip, optimal tiling, device-local) with a 3D view; destruction pushed.
+  GpuImage createImage3D(uint32_t width, uint32_t height, uint32_t depth, VkFormat format,
+                         VkImageUsageFlags usage, CleanupStack& cleanup) const;
   // A 2D view of one layer of `image`; destruction pushed.
   VkImageView createLayerView(VkImage image, VkFormat format, VkImageAspectFlags aspect, uint32_t layer,
                               CleanupStack& cleanup) const;
@@ -88,6 +93,7 @@ class VulkanContext {
   VkCommandPool pool_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;
   double timestampPeriodNs_ = 0;
+  std::string deviceName_;
 };
 
 }  // namespace tetraprobe::render_detail

@@ -248,4 +248,15 @@ void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstB
   vkUpdateDescriptorSets(device, kGpuBindingCount, writes, 0, nullptr);
 }
 
+void shaderSpecialization(const ShaderVariant& variant, uint32_t firstConstantId, ShaderSpecialization& out) {
+  static_assert(sizeof(VkBool32) == sizeof(uint32_t), "tetraprobe.glsl's bool constants are 4 bytes");
+  variant.specValues(out.data);
+  for (uint32_t i = 0; i < kShaderSpecConstantCount; ++i)
+    out.entries[i] = {firstConstantId + i, uint32_t(i * sizeof(uint32_t)), sizeof(uint32_t)};
+  out.info.mapEntryCount = kShaderSpecConstantCount;
+  out.info.pMapEntries = out.entries;
+  out.info.dataSize = sizeof(out.data);
+  out.info.pData = out.data;
+}
+
 }  // namespace tetraprobe

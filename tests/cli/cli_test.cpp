@@ -554,6 +554,45 @@ TEST_F(Cli, RenderFullAndDebugModesWriteImagesAndPassTimings) {
   }
 }
 
+// bench render on the box (bakes in about a second without refinement) at 32x24: one JSON object with the documented keys, a
+// lookup time for every variant that covers the level (its own, reported as `variant`, first), and the same
+// variant in inspect --json and render --json.
+TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string level = path("box.tpb").string();
+  ASSERT_EQ(run("bake " + path("box.obj").string() + " --samples 16 --probe-budget 0 -o " + level).code, 0);
+  const std::string view = " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24";
+  const CliRun b =
+      run("bench render " + path("box.obj").string() + " " + level + view + " --frames 2 --json");
+  if (b.err.find("no Vulkan") != std::string::npos) GTEST_SKIP() << b.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto j = nlohmann::json::parse(b.out);
+  EXPECT_EQ(j.at("width").get<int>(), 32);
+  EXPECT_EQ(j.at("height").get<int>(), 24);
+  EXPECT_FALSE(j.at("device").get<std::string>().empty());
+  const std::string variant = j.at("variant").get<std::string>();
+  const auto& lookup = j.at("lookup_ms");
+  EXPECT_GE(lookup.at("chosen").get<double>(), 0.0);
+  EXPECT_EQ(lookup.at("chosen").get<double>(), lookup.at(variant).get<double>());
+  EXPECT_GE(lookup.at("l2+planes+shadow_maps+outer+cells").get<double>(), 0.0) << "the generic variant";
+  EXPECT_GE(j.at("ambient_ms").get<double>(), 0.0);
+  EXPECT_GE(j.at("grid_ms").get<double>(), 0.0);
+  EXPECT_GT(j.at("grid").at("texture_bytes").get<double>(), 0.0);
+  EXPECT_LE(j.at("grid").at("bytes_at_108_per_node").get<double>(), j.at("tet_lookup_bytes").get<double>());
+  EXPECT_TRUE(j.at("goal_met").is_boolean());
+
+  const CliRun inspect = run("inspect " + level + " --json");
+  ASSERT_EQ(inspect.code, 0) << inspect.err;
+  EXPECT_EQ(nlohmann::json::parse(inspect.out).at("shader_variant").get<std::string>(), variant);
+  const CliRun render =
+      run("render " + path("box.obj").string() + " " + level + view + " --mode irradiance -o " +
+          path("r.png").string() + " --frames 1 --json " + path("r.json").string());
+  ASSERT_EQ(render.code, 0) << render.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(path("r.json"))).at("variant").get<std::string>(), variant);
+  EXPECT_EQ(run("bench render " + path("box.obj").string() + " " + level + " --also l3").code, 2);
+}
+
 // eval scores every method on the same points, the grid included, and writes the Markdown table, the SVG plot
 // and the JSON keys the docs name (the box bakes in well under a second; the grid at the probe count is
 // small, and --samples 16 keeps the bake and the reference cheap).

@@ -178,6 +178,7 @@ struct BenchCommand {
 constexpr BenchCommand kBenchCommands[] = {
     {"bake", benchBake, "probe baker rays/s vs bare Embree on the same rays"},
     {"locate", benchLocate, "grid+BSP locate vs walk, CGAL locate and brute force on the same queries"},
+    {"render", benchRender, "GPU lookup pass per shader variant vs a constant and a 3D-texture SH grid"},
 };
 
 void printBenchUsage(std::FILE* out) {

@@ -9,6 +9,7 @@
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe::cli {
 
@@ -45,6 +46,8 @@ int cmdInspect(int argc, char** argv) {
   const ProbeQuery query(level);
   const std::vector<ByteSection> sections = tetLookupBytes(query, true);
   const uint64_t lookupBytes = totalBytes(sections);
+  // The GLSL lookup's variant for this level (what an engine specializes its pipeline with).
+  const std::string variant = shaderVariantFor(level, query.outerCells(), query.cellGrid()).name();
   const double probes = level.probes.empty() ? 1.0 : double(level.probes.size());
   nlohmann::json lookup = {{"total", lookupBytes}, {"per_probe", double(lookupBytes) / probes}};
   for (const ByteSection& s : sections)
@@ -86,7 +89,8 @@ int cmdInspect(int argc, char** argv) {
                           {"mean_depth", grid.meanDepth},
                           {"bytes", gridBytes}}},
                         {"occlusion_bytes", level.occlusion.bytes()},
-                        {"lookup_bytes", lookup}};
+                        {"lookup_bytes", lookup},
+                        {"shader_variant", variant}};
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
@@ -110,6 +114,7 @@ int cmdInspect(int argc, char** argv) {
         cells, double(grid.cellSize), grid.nodes.size(), grid.leaves, grid.maxDepth, grid.meanDepth,
         gridBytes);
   std::printf("  occlusion  %zu bytes\n", level.occlusion.bytes());
+  std::printf("  shader     variant %s\n", variant.c_str());
   std::printf("  lookup     %llu bytes in memory, %.0f per probe:", (unsigned long long)lookupBytes,
               double(lookupBytes) / probes);
   for (const ByteSection& s : sections) std::printf(" %s %.0f", s.name.c_str(), double(s.bytes) / probes);

@@ -15,6 +15,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "render_view.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/error_image.h"
@@ -29,36 +30,6 @@ namespace {
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-RenderMesh toRenderMesh(const Scene& scene) {
-  RenderMesh mesh;
-  mesh.positions = scene.positions;
-  mesh.triangles = scene.triangles;
-  mesh.triangleAlbedo.reserve(scene.triangles.size());
-  mesh.triangleEmission.reserve(scene.triangles.size());
-  for (uint32_t m : scene.triangleMaterial) {
-    mesh.triangleAlbedo.push_back(scene.materials[m].albedo);
-    mesh.triangleEmission.push_back(scene.materials[m].emission);
-  }
-  return mesh;
-}
-
-std::vector<RenderLight> toRenderLights(const Scene& scene) {
-  std::vector<RenderLight> lights;
-  for (const Light& l : scene.lights) {
-    RenderLight r;
-    r.type = l.type == LightType::kPoint  ? RenderLightType::kPoint
-             : l.type == LightType::kSpot ? RenderLightType::kSpot
-                                          : RenderLightType::kDirectional;
-    r.position = l.position;
-    r.direction = l.direction;
-    r.intensity = l.intensity;
-    r.innerConeRad = l.innerConeRad;
-    r.outerConeRad = l.outerConeRad;
-    lights.push_back(r);
-  }
-  return lights;
 }
 
 // The renderer's modes by name.
@@ -277,40 +248,7 @@ int cmdRender(int argc, char** argv) {
   Level level;
   if (const LevelResult r = loadLevel(args.positional()[1], level); !r) throw InputError(r.message);
 
-  if (args.has("--eye") || args.has("--target")) {
-    if (!args.has("--eye") || !args.has("--target")) throw UsageError("--eye and --target go together");
-    if (args.has("--camera")) throw UsageError("--camera and --eye/--target exclude each other");
-    view.eye = args.vec3("--eye");
-    view.target = args.vec3("--target");
-    view.up = args.vec3("--up");
-    view.fovYDeg = float(args.number("--fov"));
-  } else if (!scene.cameras.empty()) {
-    const Camera* cam = &scene.cameras[0];
-    if (args.has("--camera")) {
-      cam = nullptr;
-      std::string names;
-      for (const auto& c : scene.cameras) {
-        if (c.name == args.str("--camera")) cam = &c;
-        names += (names.empty() ? "" : ", ") + c.name;
-      }
-      if (!cam)
-        throw InputError("no camera named '" + args.str("--camera") + "' in the scene (it has: " + names +
-                         ")");
-    }
-    view.eye = cam->eye;
-    view.target = cam->target;
-    view.up = cam->up;
-    view.fovYDeg = cam->fovYDeg;
-  } else {
-    if (args.has("--camera")) throw InputError("the scene names no cameras; use --eye and --target");
-    glm::vec3 lo, hi;
-    sceneBounds(scene, lo, hi);
-    const glm::vec3 c = (lo + hi) * 0.5f, ext = hi - lo;
-    view.target = c;
-    view.eye = c + glm::vec3(0.7f, 0.5f, 0.9f) * glm::max(ext, glm::vec3(glm::length(ext) * 0.3f));
-  }
-  if (!(view.fovYDeg > 0.0f && view.fovYDeg < 179.0f)) throw UsageError("--fov must be in (0, 179) degrees");
-  if (glm::length(view.target - view.eye) <= 0.0f) throw UsageError("camera eye and target coincide");
+  chooseView(args, scene, view);
 
   if (traced) {
     renderTraced(args, scene, level, view, mode, out);
@@ -359,6 +297,7 @@ int cmdRender(int argc, char** argv) {
                              {"width", view.width},
                              {"height", view.height},
                              {"lights", options.lights.size()},
+                             {"variant", result.variant.name()},
                              {"warmup_frames", result.timings.warmupFrames},
                              {"timed_frames", result.timings.timedFrames},
                              {"gpu_ms", gpu},

@@ -17,6 +17,7 @@ int cmdReference(int argc, char** argv);
 int cmdExportSh(int argc, char** argv);
 int cmdBench(int argc, char** argv);
 int benchLocate(int argc, char** argv);  // `bench locate` (bench_locate.cpp)
+int benchRender(int argc, char** argv);  // `bench render` (bench_render.cpp)
 int cmdDiff(int argc, char** argv);
 
 // Writes a JSON report atomically (2-space indent, trailing newline); throws on failure.

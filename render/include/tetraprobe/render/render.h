@@ -6,6 +6,9 @@
 // double) so the GPU works in the level's local frame. Images are linear float RGBA, row 0 = top.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +16,7 @@
 
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe {
 
@@ -116,34 +120,6 @@ struct RenderTimings {
   int warmupFrames = 0, timedFrames = 1;
 };
 
-// What renderLevel draws besides the mesh and the level, and how it times the GPU.
-struct RenderOptions {
-  std::vector<RenderLight> lights;  // kFull: the direct light (world frame)
-  int shadowMapSize = 1024;         // kFull: texels per side of every shadow-map layer, 16..8192
-  // The frame (every pass of the mode) is submitted warmupFrames + timedFrames times; RenderTimings hold the
-  // median over the timed ones (the first frame carries lavapipe's shader compile). Each >= 0 and
-  // timedFrames >= 1; the images are the last frame's (every frame renders the same).
-  int warmupFrames = 0;
-  int timedFrames = 1;
-};
-
-struct RenderResult {
-  Image color;     // per RenderView::mode; a = 1 on geometry; background pixels are 0 (all four channels)
-  Image position;  // level local frame, metres; a = 1 where geometry, all 0 elsewhere
-  Image normal;    // unit normal of the visible triangle (a = 1 where geometry)
-  Image albedo;    // albedo of the visible triangle (a = 1 where geometry)
-  RenderTimings timings;
-};
-
-// Renders `mesh` lit by `level` (whose ProbeQuery `query` provides the start grid) from `view`. Creates its
-// own Vulkan instance (no surface) and device (prefers lavapipe, else the first device with a
-// graphics+compute queue), and destroys every Vulkan object before returning. Set TETRAPROBE_VK_VALIDATION=1
-// to enable VK_LAYER_KHRONOS_validation when installed. Throws std::runtime_error with a one-line message on
-// failure (no Vulkan device, bad view size, out of memory, ...).
-// Probe kinds (kProbes) come from Level::probeKinds. `options` adds lights (kFull) and frame counts.
-RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
-                         const RenderView& view, const RenderOptions& options = {});
-
 // A regular SH L2 grid for the lighting pass to read instead of a level (shaders/lighting_grid.comp): the
 // `grid` method of `tetraprobe eval` (eval/grid_volume.h), rendered to time it against the tet lookup.
 // Node (i, j, k) at min + (i, j, k) x step, world metres; `sh` holds dims.x * dims.y * dims.z nodes, x fastest,
@@ -155,6 +131,55 @@ struct RenderGrid {
   glm::ivec3 dims{0};         // each >= 2
   const ShRgb* sh = nullptr;  // must stay valid during the call
 };
+
+// What renderLevel draws besides the mesh and the level, and how it times the GPU.
+struct RenderOptions {
+  std::vector<RenderLight> lights;  // kFull: the direct light (world frame)
+  int shadowMapSize = 1024;         // kFull: texels per side of every shadow-map layer, 16..8192
+  // The frame (every pass of the mode) is submitted warmupFrames + timedFrames times; RenderTimings hold the
+  // median over the timed ones (the first frame carries lavapipe's shader compile). Each >= 0 and
+  // timedFrames >= 1; the images are the last frame's (every frame renders the same).
+  int warmupFrames = 0;
+  int timedFrames = 1;
+  // The lookup's shader variant in the lighting pass (lighting.comp specialized; runtime/shader_variant.h).
+  // Empty: the level's own, shaderVariantFor(level, query.outerCells(), query.cellGrid()). A variant that
+  // does not cover the level answers wrongly where the level uses what it leaves out.
+  std::optional<ShaderVariant> variant;
+  // SPIR-V replacing lighting.comp (same interface and specialization constants; e.g. a debug build of the
+  // lookup, for tests). Must stay valid during the call. Null: lighting.comp.
+  const uint32_t* lightingSpirv = nullptr;
+  size_t lightingSpirvBytes = 0;
+  // Benchmark passes over the same G-buffer, each timed in a command buffer of its own before the lighting
+  // pass (whose output then overwrites theirs), PassTiming names "lookup:" + ShaderVariant::name() for each
+  // of benchVariants, "ambient" (benchAmbient: writes a constant E, the floor of a full-screen pass) and
+  // "grid_texture" (benchGrid: the trilinear SH grid read from seven 3D textures with hardware filtering,
+  // shaders/lighting_grid_texture.comp; RGBA32F when the device filters it linearly, else RGBA16F).
+  std::vector<ShaderVariant> benchVariants;
+  bool benchAmbient = false;
+  const RenderGrid* benchGrid = nullptr;
+};
+
+struct RenderResult {
+  Image color;     // per RenderView::mode; a = 1 on geometry; background pixels are 0 (all four channels)
+  Image position;  // level local frame, metres; a = 1 where geometry, all 0 elsewhere
+  Image normal;    // unit normal of the visible triangle (a = 1 where geometry)
+  Image albedo;    // albedo of the visible triangle (a = 1 where geometry)
+  RenderTimings timings;
+  ShaderVariant variant;   // the lighting pass's (levels only)
+  std::string deviceName;  // the Vulkan device's (VkPhysicalDeviceProperties::deviceName)
+  // With RenderOptions::benchGrid: the textures' format ("rgba32f" or "rgba16f") and bytes (7 texels a node).
+  std::string gridTextureFormat;
+  uint64_t gridTextureBytes = 0;
+};
+
+// Renders `mesh` lit by `level` (whose ProbeQuery `query` provides the start grid) from `view`. Creates its
+// own Vulkan instance (no surface) and device (prefers lavapipe, else the first device with a
+// graphics+compute queue), and destroys every Vulkan object before returning. Set TETRAPROBE_VK_VALIDATION=1
+// to enable VK_LAYER_KHRONOS_validation when installed. Throws std::runtime_error with a one-line message on
+// failure (no Vulkan device, bad view size, out of memory, ...).
+// Probe kinds (kProbes) come from Level::probeKinds. `options` adds lights (kFull) and frame counts.
+RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
+                         const RenderView& view, const RenderOptions& options = {});
 
 // renderLevel with the grid's trilinear lookup in the lighting pass (same G-buffer, same timings); modes
 // kIrradiance and kIndirect only. The local

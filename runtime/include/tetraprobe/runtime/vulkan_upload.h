@@ -17,6 +17,7 @@
 #include "tetraprobe/runtime/gpu_layout.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe {
 
@@ -82,5 +83,24 @@ VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const 
 bool cmdUpdateLevelSh(VkCommandBuffer cmd, const VulkanLevelBuffers& buffers, const Level& level,
                       size_t first, size_t count, VkPipelineStageFlags shaderStages,
                       std::string* error = nullptr);
+
+// The VkSpecializationInfo of a shader variant (shader_variant.h) for a pipeline whose shader includes
+// tetraprobe.glsl: constant_id firstConstantId + 0..4 (TETRAPROBE_SPEC_ID in the shader, default 0), 4 bytes
+// each. `info` points into this object, so it is neither copied nor moved: fill it in place with
+// shaderSpecialization() and keep it alive until vkCreateComputePipelines / vkCreateGraphicsPipelines
+// returns. Engines: shaderSpecialization(shaderVariantFor(level, query.outerCells(), query.cellGrid()), 0,
+// spec); stageInfo.pSpecializationInfo = &spec.info.
+struct ShaderSpecialization {
+  VkSpecializationMapEntry entries[kShaderSpecConstantCount] = {};
+  uint32_t data[kShaderSpecConstantCount] = {};
+  VkSpecializationInfo info = {};
+
+  ShaderSpecialization() = default;
+  ShaderSpecialization(const ShaderSpecialization&) = delete;
+  ShaderSpecialization& operator=(const ShaderSpecialization&) = delete;
+};
+
+// Fills `out` for `variant` (entries, data, and info pointing at them).
+void shaderSpecialization(const ShaderVariant& variant, uint32_t firstConstantId, ShaderSpecialization& out);
 
 }  // namespace tetraprobe

@@ -1,0 +1,192 @@
+// `tetraprobe bench render SCENE LEVEL`: the GPU cost of the per-pixel tet lookup against its peers in one run,
+// on the same G-buffer: the lookup pass in every shader variant that covers the level (runtime/
+// shader_variant.h), a pass writing a constant (the floor of any full-screen pass) and a trilinear SH L2 grid
+// read from 3D textures with hardware filtering, of the tet level's bytes (what an engine's irradiance volume
+// costs). Times are GPU timestamps around each pass, the median of --frames frames after 2 warm-up frames.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <glm/common.hpp>
+
+#include "args.h"
+#include "commands.h"
+#include "render_view.h"
+#include "tetraprobe/common/error.h"
+#include "tetraprobe/eval/evaluate.h"
+#include "tetraprobe/eval/grid_volume.h"
+#include "tetraprobe/render/render.h"
+#include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/shader_variant.h"
+#include "tetraprobe/scene/load.h"
+
+namespace tetraprobe::cli {
+
+namespace {
+
+constexpr double kLookupGoalRatio = 1.5;  // issue #13: lookup_ms <= 1.5 x grid_ms on lavapipe
+
+// The grid's nodes hold the level's own SH, blended at each node as the lookup blends it (no normal, so no
+// occlusion): the texture pass then shows the same light field. Timing does not depend on the values.
+std::vector<ShRgb> gridFromLevel(const ProbeQuery& query, const GridLayout& layout) {
+  const Level& level = query.level();
+  std::vector<ShRgb> sh(layout.nodes());
+  int32_t hint = -1;
+  for (size_t n = 0; n < sh.size(); ++n) {
+    const Location loc = query.locate(layout.node(n), hint);
+    if (loc.tet < 0) continue;
+    hint = loc.tet;
+    const ShRgb* probes[4];
+    for (int i = 0; i < 4; ++i) probes[i] = &level.sh[size_t(level.tets[size_t(loc.tet)].v[i])];
+    const float w[4] = {loc.weights[0], loc.weights[1], loc.weights[2], loc.weights[3]};
+    sh[n] = shBlend(probes, w, 4);
+  }
+  return sh;
+}
+
+double passMs(const RenderResult& r, const std::string& name) {
+  for (const PassTiming& p : r.timings.passes)
+    if (p.name == name) return p.ms;
+  return 0.0;
+}
+
+}  // namespace
+
+int benchRender(int argc, char** argv) {
+  Args args(
+      "tetraprobe bench render SCENE LEVEL.tpb [--size 1280x720] [--camera NAME | --eye X,Y,Z --target "
+      "X,Y,Z]\n"
+      "                        [--frames 9] [--json]",
+      "Times, on one G-buffer of the scene's view, GPU passes writing E per pixel: the tet lookup\n"
+      "(lighting.comp) in every shader variant that covers the level (the level's own first; ambient =\n"
+      "a constant, the floor of a full-screen pass; grid = a regular SH L2 grid over the scene's box, of\n"
+      "at most the tet lookup's bytes at 108 bytes a node (as `eval` sizes its equal-bytes grid), holding\n"
+      "the level's SH blended at each node, read from seven 3D textures with hardware trilinear filtering).\n"
+      "Each time is the median over --frames frames after 2 warm-up frames of Vulkan timestamps around\n"
+      "the pass. The goal on lavapipe: the level's lookup_ms <= 1.5 x grid_ms.",
+      {{"--size", "", "WxH", "image size in pixels", "1280x720"},
+       {"--camera", "", "NAME", "a camera named in the scene (default: the scene's first, else automatic)",
+        ""},
+       {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
+       {"--target", "", "X,Y,Z", "point the camera looks at", ""},
+       {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
+       {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
+       {"--frames", "", "N", "timed frames (median), after 2 warm-up frames", "9"},
+       {"--also", "", "V1,V2",
+        "more variants to time, named as printed (e.g. l2+outer+cells), even ones that "
+        "leave out what the level uses (their pixels are then wrong): to profile the lookup",
+        ""},
+       {"--json", "", "", "print the figures as one JSON object", ""}});
+  if (!args.parse(argc, argv)) return 0;
+  args.requirePositional(2, 2);
+  RenderView view;
+  view.mode = RenderMode::kIrradiance;
+  const std::string size = args.str("--size");
+  if (std::sscanf(size.c_str(), "%dx%d", &view.width, &view.height) != 2 || view.width < 1 ||
+      view.height < 1 || view.width > 16384 || view.height > 16384)
+    throw UsageError("--size must be WxH with 1..16384 pixels a side, not '" + size + "'");
+  RenderOptions options;
+  options.warmupFrames = 2;
+  options.timedFrames = args.integer("--frames");
+  if (options.timedFrames < 1 || options.timedFrames > 500) throw UsageError("--frames must be in 1..500");
+
+  const Scene scene = loadScene(args.positional()[0]);
+  Level level;
+  if (const LevelResult r = loadLevel(args.positional()[1], level); !r) throw InputError(r.message);
+  if (level.tets.empty()) throw InputError("the level has no tets: nothing to look up");
+  chooseView(args, scene, view);
+
+  const ProbeQuery query(level);
+  const ShaderVariant chosen = shaderVariantFor(level, query.outerCells(), query.cellGrid());
+  options.variant = chosen;
+  options.benchVariants = coveringShaderVariants(chosen);
+  if (args.has("--also")) {
+    std::string list = args.str("--also") + ",";
+    for (size_t start = 0, end; (end = list.find(',', start)) != std::string::npos; start = end + 1) {
+      const std::string name = list.substr(start, end - start);
+      ShaderVariant v;
+      if (!parseShaderVariant(name, v))
+        throw UsageError("--also: '" + name + "' is not a variant name (e.g. l2+planes+outer+cells)");
+      if (std::find(options.benchVariants.begin(), options.benchVariants.end(), v) ==
+          options.benchVariants.end())
+        options.benchVariants.push_back(v);
+    }
+  }
+  options.benchAmbient = true;
+
+  const uint64_t tetBytes = totalBytes(tetLookupBytes(query, !level.occlusion.empty()));
+  glm::vec3 lo, hi;
+  sceneBounds(scene, lo, hi);
+  const GridLayout layout = gridLayoutForBytes(glm::dvec3(lo), glm::dvec3(hi), tetBytes);
+  const std::vector<ShRgb> gridSh = gridFromLevel(query, layout);
+  RenderGrid grid;
+  grid.min = layout.min;
+  grid.step = layout.step;
+  grid.dims = layout.dims;
+  grid.sh = gridSh.data();
+  options.benchGrid = &grid;
+
+  const RenderResult r = renderLevel(toRenderMesh(scene), level, query, view, options);
+  if (r.timings.passes.empty()) throw std::runtime_error("bench render: the Vulkan queue has no timestamps");
+
+  nlohmann::json lookup = nlohmann::json::object();
+  const double chosenMs = passMs(r, "lookup:" + chosen.name());
+  lookup["chosen"] = chosenMs;
+  for (const ShaderVariant& v : options.benchVariants) lookup[v.name()] = passMs(r, "lookup:" + v.name());
+  const double ambientMs = passMs(r, "ambient"), gridMs = passMs(r, "grid_texture");
+  const double ratio = gridMs > 0.0 ? chosenMs / gridMs : 0.0;
+  const bool met = gridMs > 0.0 && ratio <= kLookupGoalRatio;
+  size_t geometry = 0;
+  for (size_t i = 0; i < r.position.rgba.size(); i += 4) geometry += r.position.rgba[i + 3] != 0.0f;
+
+  if (args.has("--json")) {
+    const nlohmann::json j = {
+        {"scene", args.positional()[0]},
+        {"level", args.positional()[1]},
+        {"width", view.width},
+        {"height", view.height},
+        {"geometry_pixels", geometry},
+        {"device", r.deviceName},
+        {"warmup_frames", r.timings.warmupFrames},
+        {"timed_frames", r.timings.timedFrames},
+        {"variant", chosen.name()},
+        {"lookup_ms", lookup},
+        {"ambient_ms", ambientMs},
+        {"grid_ms", gridMs},
+        {"gbuffer_ms", r.timings.gbufferMs},
+        {"grid",
+         {{"dims", {layout.dims.x, layout.dims.y, layout.dims.z}},
+          {"step_m", layout.step},
+          {"bytes_at_108_per_node", layout.bytes()},
+          {"texture_format", r.gridTextureFormat},
+          {"texture_bytes", r.gridTextureBytes}}},
+        {"tet_lookup_bytes", tetBytes},
+        {"ratio_lookup_to_grid", ratio},
+        {"goal_ratio", kLookupGoalRatio},
+        {"goal_met", met},
+        {"ms_definition",
+         "per pass, the median over the timed frames of the difference between Vulkan timestamps before "
+         "and after the pass, each pass in a command buffer of its own on the same G-buffer"}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  std::printf("bench render: %dx%d (%zu geometry pixels) on %s, median of %d frames after %d warm-up\n",
+              view.width, view.height, geometry, r.deviceName.c_str(), r.timings.timedFrames,
+              r.timings.warmupFrames);
+  for (const ShaderVariant& v : options.benchVariants)
+    std::printf("  lookup %-38s %9.3f ms%s\n", v.name().c_str(), passMs(r, "lookup:" + v.name()),
+                v == chosen                      ? "  (the level's)"
+                : shaderVariantCovers(v, chosen) ? ""
+                                                 : "  (does not cover the level: profiling only)");
+  std::printf("  ambient (a constant)                          %9.3f ms\n", ambientMs);
+  std::printf(
+      "  grid (3D textures)                            %9.3f ms  (%dx%dx%d nodes of %.3g m, %s, %.2f MB)\n",
+      gridMs, layout.dims.x, layout.dims.y, layout.dims.z, layout.step, r.gridTextureFormat.c_str(),
+      double(r.gridTextureBytes) / 1e6);
+  std::printf("  tet lookup bytes %.2f MB; lookup / grid = %.2f (goal <= %.1f: %s)\n", double(tetBytes) / 1e6,
+              ratio, kLookupGoalRatio, met ? "met" : "NOT met");
+  return 0;
+}
+
+}  // namespace tetraprobe::cli
