@@ -66,13 +66,14 @@ ErrorEstimate scoreRefinePoints(const Level& level, std::vector<RefinePoint>& po
 
 std::vector<glm::dvec3> proposeRefinement(const SceneTracer& tracer, const Level& level,
                                           const std::vector<RefinePoint>& points, size_t budget,
-                                          double spacing, double minError) {
+                                          double spacing, double minError, double maxOffset) {
   if (budget == 0 || !(spacing > 0.0)) return {};
   std::vector<size_t> order(points.size());
   std::iota(order.begin(), order.end(), size_t(0));
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return points[a].error > points[b].error; });
-  ProbesInFront proposals(tracer, level, spacing);
+  ProbesInFront proposals(tracer, level, spacing,
+                          maxOffset > 0.0 ? maxOffset : spacing * kRefineOffsetFraction);
   FlushDenormalsScope ftz;
   for (size_t k : order) {
     if (proposals.probes().size() >= budget || !(points[k].error > minError)) break;

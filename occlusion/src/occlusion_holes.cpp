@@ -76,8 +76,11 @@ struct ProbesInFront::Grids {
   std::unordered_set<glm::i64vec3, CellHash> taken;
 };
 
-ProbesInFront::ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing)
-    : tracer_(tracer), spacing_(spacing), grids_(std::make_unique<Grids>(spacing / 10.0)) {
+ProbesInFront::ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing, double maxOffset)
+    : tracer_(tracer),
+      spacing_(spacing),
+      maxOffset_(maxOffset > 0.0 ? maxOffset : spacing / 2.0),
+      grids_(std::make_unique<Grids>(spacing / 10.0)) {
   for (const glm::vec3& p : level.probes) grids_->near.add(glm::dvec3(p) + level.origin);
 }
 
@@ -88,7 +91,7 @@ bool ProbesInFront::propose(const glm::dvec3& point, const glm::vec3& normal) {
   const Hit hit = tracer_.intersect(glm::vec3(point) + n * tracer_.rayEpsilon(), n, 0.0f,
                                     std::numeric_limits<float>::infinity());
   const double free = hit.hit ? double(hit.t) : std::numeric_limits<double>::infinity();
-  const double d = std::min(spacing_ / 2.0, free / 2.0);
+  const double d = std::min(maxOffset_, free / 2.0);
   if (d < spacing_ / 50.0) return false;
   const glm::dvec3 probe = point + glm::dvec3(n) * d;
   if (!grids_->taken.insert(cellOf(probe, spacing_ / 2.0)).second) return false;

@@ -86,6 +86,10 @@ int cmdBake(int argc, char** argv) {
         "auto"},
        {"--refine-points", "", "N",
         "refinement: surface points the error is measured at (twice: select, check)", "2048"},
+       {"--refine-offset", "", "auto|METRES",
+        "refinement: how far in front of its surface point a new probe sits at most (half the free "
+        "distance when less); auto = spacing / 8, close enough to see what the surface sees",
+        "auto"},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
@@ -166,6 +170,11 @@ int cmdBake(int argc, char** argv) {
   opt.refinePoints = args.integer("--refine-points");
   if (opt.probeBudget < -1) throw UsageError("--probe-budget must be auto or >= 0");
   if (opt.refinePoints < 1) throw UsageError("--refine-points must be >= 1");
+  if (args.str("--refine-offset") != "auto") {
+    opt.refineOffset = args.number("--refine-offset");
+    if (!(opt.refineOffset > 0.0) || !std::isfinite(opt.refineOffset))
+      throw UsageError("--refine-offset must be auto or a positive number of metres");
+  }
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");

@@ -369,7 +369,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     stats.refineBefore = scoreRefinePoints(level, check);
     scoreRefinePoints(level, select);
     const std::vector<glm::dvec3> added =
-        proposeRefinement(tracer, level, select, size_t(budget), options.spacing);
+        proposeRefinement(tracer, level, select, size_t(budget), options.spacing, 0.1, options.refineOffset);
     stats.refineProbes = added.size();
     if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement);
     stats.refineAfter = scoreRefinePoints(level, check);

@@ -44,6 +44,9 @@ struct PipelineOptions {
   // of the probes that are not shell probes.
   int probeBudget = 0;
   int refinePoints = 2048;
+  // How far in front of its surface point a refinement probe sits at most, metres; <= 0: spacing x
+  // kRefineOffsetFraction (refine.h).
+  double refineOffset = 0.0;
 };
 
 struct PipelineStats {

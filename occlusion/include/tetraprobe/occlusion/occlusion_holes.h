@@ -33,13 +33,13 @@ struct OcclusionHoles {
 };
 
 // New probes in front of surface points, shared by hole filling and error-driven refinement (eval/refine.h):
-// a proposal for point p with unit normal n sits at p + n x d, d = min(spacing / 2, half the free distance
-// along n), so it stays on the point's side of nearby geometry; refused when d < spacing / 50 (no room), when
+// a proposal for point p with unit normal n sits at p + n x d, d = min(maxOffset, half the free distance
+// along n) (maxOffset <= 0: spacing / 2, hole filling's), so it stays on the point's side of nearby geometry; refused when d < spacing / 50 (no room), when
 // an earlier proposal took its spacing / 2 grid cell, or when a probe of `level` or an earlier proposal lies
 // within spacing / 10 (the placement's merge distance). Deterministic: proposals are judged in call order.
 class ProbesInFront {
  public:
-  ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing);
+  ProbesInFront(const SceneTracer& tracer, const Level& level, double spacing, double maxOffset = 0.0);
   ~ProbesInFront();
   // True (and the position appended to probes()) when the proposal for the point is taken.
   bool propose(const glm::dvec3& point, const glm::vec3& normal);
@@ -49,6 +49,7 @@ class ProbesInFront {
   struct Grids;
   const SceneTracer& tracer_;
   double spacing_;
+  double maxOffset_;
   std::vector<glm::dvec3> probes_;
   std::unique_ptr<Grids> grids_;
 };
