@@ -1,4 +1,5 @@
-// Visual regression tests: bake the bundled two-room sample with fixed settings, render each of its cameras
+// Visual regression tests: bake the bundled two-room sample with fixed settings (no path budget: every test
+// process bakes again, and what is compared is the renderer, not the bake's noise), render each of its cameras
 // headless (Vulkan; lavapipe in CI) at a fixed exposure, and compare with the reference images in
 // tests/visual/reference/ using `tetraprobe diff`. A fixed exposure (not auto) makes a global brightness
 // regression visible. On a mismatch the rendered image and a diff image are left in <build>/visual/ for
@@ -57,9 +58,9 @@ class Visual : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     fs::create_directories(kOut);
-    bakeStatus_ =
-        sh(std::string(TETRAPROBE_CLI) + " bake " + kScene + " --spacing 0.5 --samples 128 --threads 0 -o " +
-           (kOut / "two_rooms.tpb").string() + " > " + (kOut / "bake.log").string() + " 2>&1");
+    bakeStatus_ = sh(std::string(TETRAPROBE_CLI) + " bake " + kScene +
+                     " --spacing 0.5 --samples 128 --path-budget 0 --threads 0 -o " +
+                     (kOut / "two_rooms.tpb").string() + " > " + (kOut / "bake.log").string() + " 2>&1");
   }
   static int bakeStatus_;
 
