@@ -6,7 +6,9 @@
 # libclang-rt-14-dev, which tools/setup/setup.sh installs). A crash, sanitizer report, leak or timeout fails
 # (exit 1) and leaves the input in FUZZ_BUILD_DIR/artifacts/: reproduce with
 #   FUZZ_BUILD_DIR/bin/tetraprobe_fuzz_level ARTIFACT
-# then commit it as a regression input (tests/runtime/fuzz_regressions/, tests/scene/fuzz_regressions/).
+# then commit it as a regression input with a test that loads it through the normal build and expects a
+# typed error (tests/runtime/fuzz_regressions/ or tests/scene/fuzz_regressions/, which this script also feeds
+# to the fuzzers when present).
 # The corpora in FUZZ_BUILD_DIR/corpus/ persist between runs, so longer local runs keep their coverage.
 set -euo pipefail
 TP=$1
