@@ -2,14 +2,22 @@
 #   make demo   set up, build (Release), bake the bundled sample, render out/demo.png (full) and
 #               out/demo_indirect.png, evaluate
 #   make test   set up, build, run the whole test suite through ctest
+#   make fuzz   libFuzzer harnesses over the level and scene loaders, FUZZ_SECONDS each (clang; own build dir)
+#   make test-sanitize   the suite under AddressSanitizer + UndefinedBehaviorSanitizer (own build dir)
 BUILD_DIR ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 TP := $(BUILD_DIR)/bin/tetraprobe
 SAMPLE := samples/two_rooms/two_rooms.scene.json
 WERROR := $(if $(CI),ON,OFF)
+FUZZ_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 60
+SANITIZE_DIR ?= build-sanitize
+# Left out of the sanitizer run (ctest -E below): the visual tests (lavapipe's LLVM JIT under ASan, minutes
+# for pixels the normal run compares) and the ten-million-query cell-grid sweeps (the paths the small CellGrid
+# tests take, 10^7 times).
 
-.PHONY: all setup configure build demo test bench update-references clean
+.PHONY: all setup configure build demo test fuzz test-sanitize bench update-references clean
 
 all: build
 
@@ -32,6 +40,22 @@ demo: build
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+fuzz: build
+	@JOBS=$(JOBS) tools/fuzz/run.sh $(TP) $(FUZZ_DIR) $(FUZZ_SECONDS)
+
+# The suite under ASan + UBSan (GCC), every report fails the run; third-party leaks, should one appear, go in
+# tools/sanitize/lsan.supp with the reason. SANITIZE_TARGETS: `all` (the default) or the test executables to
+# build and run (CI: the module tests; the CLI's tests need every module built again with ASan).
+SANITIZE_TARGETS ?= all
+test-sanitize: setup
+	@cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTETRAPROBE_SANITIZE=ON \
+		-DTETRAPROBE_BUILD_BENCH=OFF -DTETRAPROBE_WERROR=$(WERROR) >/dev/null
+	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)
+	@cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+		LSAN_OPTIONS=suppressions=$(CURDIR)/tools/sanitize/lsan.supp:print_suppressions=0 \
+		UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+		ctest --output-on-failure -j $(JOBS) -E "_NOT_BUILT|^Visual\.|TenMillionQueries"
+
 # Re-render the visual regression references after an intended change (look at them before committing).
 update-references: build
 	@cd $(BUILD_DIR) && TETRAPROBE_UPDATE_REFERENCES=1 ctest -R Visual --output-on-failure
@@ -41,4 +65,4 @@ bench: build
 	@$(BUILD_DIR)/bin/tetraprobe_bench
 
 clean:
-	rm -rf $(BUILD_DIR) out
+	rm -rf $(BUILD_DIR) $(FUZZ_DIR) $(SANITIZE_DIR) out

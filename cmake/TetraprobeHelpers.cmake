@@ -9,6 +9,25 @@ target_compile_options(tetraprobe_warnings INTERFACE -Wall -Wextra -Wpedantic -W
 # Strict IEEE floating point everywhere: CGAL's predicates and the bit-identical bake depend on it.
 target_compile_options(tetraprobe_warnings INTERFACE -fno-fast-math -ffp-contract=off)
 
+# Sanitizers apply to every target of the build (libraries, tests, tools), so they are directory-wide options
+# rather than an INTERFACE target: a static library compiled without them would hide its bugs.
+# TETRAPROBE_SANITIZE: ASan + UBSan (any compiler; float-to-int overflow included, which GCC leaves out of
+# -fsanitize=undefined). TETRAPROBE_FUZZ: the same plus libFuzzer's coverage (clang only).
+macro(tetraprobe_enable_sanitizers)
+  set(_tp_san -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=undefined,float-cast-overflow
+      -fno-omit-frame-pointer)
+  if(TETRAPROBE_FUZZ)
+    if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+      message(FATAL_ERROR "TETRAPROBE_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
+    endif()
+    add_compile_options(${_tp_san} -fsanitize=fuzzer-no-link)
+    add_link_options(-fsanitize=address,undefined)
+  elseif(TETRAPROBE_SANITIZE)
+    add_compile_options(${_tp_san})
+    add_link_options(-fsanitize=address,undefined)
+  endif()
+endmacro()
+
 # tetraprobe_add_module(NAME SOURCES ... [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
 # Builds tetraprobe_<NAME> with public headers under <dir>/include, aliased tetraprobe::<NAME>.
 function(tetraprobe_add_module name)

@@ -45,6 +45,7 @@ constexpr size_t kScoreSample = 64;     // tets a candidate is scored on, per no
 constexpr size_t kInsideCheckUpTo = 6;  // lists this short check whether one tet holds the whole region
 constexpr int64_t kMaxCellsPerTet =
     4096;  // a tet bigger than this many cells is kept to them (walk covers it)
+constexpr double kMaxCellKey = double(1 << 30);  // |cell coordinate|: int32 with room for key + 1
 
 }  // namespace
 
@@ -410,12 +411,22 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
       a = glm::min(a, glm::dvec3(probes[size_t(tets[t].v[i])]));
       b = glm::max(b, glm::dvec3(probes[size_t(tets[t].v[i])]));
     }
+    // Cell coordinates in double, range-checked before any conversion: a tet beyond the int32 keys (huge
+    // coordinates for the cell size) or over too many cells is left to the walk, like a missing cell.
+    double f0[3], f1[3];
+    bool representable = true;
+    for (int k = 0; k < 3; ++k) {
+      f0[k] = std::floor((a[k] - margin - gmin[k]) / cs);
+      f1[k] = std::floor((b[k] + margin - gmin[k]) / cs);
+      representable = representable && f0[k] >= -kMaxCellKey && f1[k] <= kMaxCellKey;  // false for NaN
+    }
+    if (!representable || (f1[0] - f0[0] + 1) * (f1[1] - f0[1] + 1) * (f1[2] - f0[2] + 1) > kMaxCellsPerTet)
+      continue;
     int32_t c0[3], c1[3];
     for (int k = 0; k < 3; ++k) {
-      c0[k] = int32_t(std::floor((a[k] - margin - gmin[k]) / cs));
-      c1[k] = int32_t(std::floor((b[k] + margin - gmin[k]) / cs));
+      c0[k] = int32_t(f0[k]);
+      c1[k] = int32_t(f1[k]);
     }
-    if (int64_t(c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1) > kMaxCellsPerTet) continue;
     for (int32_t z = c0[2]; z <= c1[2]; ++z)
       for (int32_t y = c0[1]; y <= c1[1]; ++y)
         for (int32_t x = c0[0]; x <= c1[0]; ++x) refs.push_back({{x, y, z}, int32_t(t)});

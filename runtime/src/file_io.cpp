@@ -2,13 +2,15 @@
 #include "tetraprobe/runtime/file_io.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
+#include <exception>
+#include <string>
 
 namespace tetraprobe {
 
@@ -46,24 +48,43 @@ bool writeFileAtomic(const std::string& path, std::string_view bytes, std::strin
   return true;
 }
 
-bool readFile(const std::string& path, std::vector<char>& bytes, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+bool readFile(const std::string& path, std::vector<char>& bytes, std::string* error, uint64_t maxBytes,
+              bool* tooLarge) {
+  if (tooLarge) *tooLarge = false;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
     if (error) *error = path + ": cannot open: " + std::strerror(errno);
     return false;
   }
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) {
-    if (error) *error = path + ": cannot read (not a regular file?)";
+  auto fail = [&](const std::string& what) {
+    if (error) *error = path + ": " + what;
+    ::close(fd);
     return false;
+  };
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) return fail(std::string("cannot stat: ") + std::strerror(errno));
+  // Directories, FIFOs and devices have no size to trust (/dev/zero would never end).
+  if (!S_ISREG(st.st_mode)) return fail("cannot read (not a regular file)");
+  const auto size = uint64_t(st.st_size);
+  if (size > maxBytes) {
+    if (tooLarge) *tooLarge = true;
+    return fail(std::to_string(size) + " bytes, more than the limit of " + std::to_string(maxBytes));
   }
-  in.seekg(0, std::ios::beg);
-  bytes.resize(size_t(size));
-  if (size > 0 && !in.read(bytes.data(), size)) {
-    if (error) *error = path + ": read failed";
-    return false;
+  try {
+    bytes.assign(size_t(size), 0);
+  } catch (const std::exception&) {  // bad_alloc or length_error: a size under the cap may still not fit
+    if (tooLarge) *tooLarge = true;
+    return fail("cannot allocate " + std::to_string(size) + " bytes to read it");
   }
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return fail(std::string("read failed: ") + std::strerror(errno));
+    if (n == 0) return fail("read failed: the file shrank while it was read");
+    done += size_t(n);
+  }
+  ::close(fd);
   return true;
 }
 

@@ -35,6 +35,10 @@ constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, 
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
 constexpr uint64_t kMaxGeneratorBytes = 1u << 20;
+// Probe positions are local (relative to the level's double origin): beyond 2^24 m (16,777 km, more than the
+// Earth's diameter) a float holds a position to no better than 2 m, and the cell-grid keys built from them
+// on load could leave the int32 range for small cells. The bake centres the origin on the probes.
+constexpr float kMaxLocalCoordinate = 16777216.0f;
 static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 32-byte std430 Tet");
 static_assert(kShBytes == sizeof(ShRgb), "the file's SH record is the 108-byte ShRgb");
 static_assert(kOuterCellBytes == sizeof(OuterCell), "the file's outer cell record is the 80-byte OuterCell");
@@ -158,8 +162,11 @@ LevelResult validateLevel(const Level& level) {
                    std::to_string(kMaxGeneratorBytes));
   const int64_t probeCount = int64_t(level.probes.size()), tetCount = int64_t(level.tets.size());
   for (int64_t p = 0; p < probeCount; ++p) {
-    if (!finite3(level.probes[size_t(p)]))
-      return corrupt("probe " + std::to_string(p) + ": non-finite position");
+    const glm::vec3& pos = level.probes[size_t(p)];
+    if (!finite3(pos)) return corrupt("probe " + std::to_string(p) + ": non-finite position");
+    if (std::max({std::abs(pos.x), std::abs(pos.y), std::abs(pos.z)}) > kMaxLocalCoordinate)
+      return corrupt("probe " + std::to_string(p) + ": position beyond " +
+                     std::to_string(int64_t(kMaxLocalCoordinate)) + " m of the level origin");
     const ShRgb& sh = level.sh[size_t(p)];
     for (int i = 0; i < kShCoeffCount; ++i) {
       if (!finite3(sh.c[size_t(i)]))
@@ -187,6 +194,39 @@ LevelResult validateLevel(const Level& level) {
         if (other.n[0] != t && other.n[1] != t && other.n[2] != t && other.n[3] != t)
           return corrupt(where + "neighbour " + std::to_string(n) + " does not name it back");
       }
+    }
+  }
+  // Second pass, every index now in range: a neighbour shares the face it is named across and names this tet
+  // back across that same face (else walks, which trust the table, would wander: O(tets) per query), and no
+  // two probes of a tet sit at one float position (the tet would be flat for good: no weights exist in it;
+  // the build refuses these too, buildTetRecords in tetra/). O(T), a few compares per face.
+  for (int64_t t = 0; t < tetCount; ++t) {
+    const Tet& tet = level.tets[size_t(t)];
+    const auto where = [t] { return "tet " + std::to_string(t) + ": "; };
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < i; ++j)
+        if (level.probes[size_t(tet.v[i])] == level.probes[size_t(tet.v[j])])
+          return corrupt(where() + "flat: probes " + std::to_string(tet.v[j]) + " and " +
+                         std::to_string(tet.v[i]) + " are at the same float position");
+    for (int i = 0; i < 4; ++i) {
+      const int32_t n = tet.n[i];
+      if (n < 0) continue;
+      const Tet& other = level.tets[size_t(n)];
+      int opposite = -1, shared = 0;  // other's vertex off this tet's face i, and the face's vertices found
+      for (int j = 0; j < 4; ++j) {
+        bool onFace = false;
+        for (int k = 0; k < 4; ++k) onFace = onFace || (k != i && tet.v[k] == other.v[j]);
+        if (onFace)
+          ++shared;
+        else
+          opposite = j;
+      }
+      if (shared != 3 || other.v[opposite] == tet.v[i])
+        return corrupt(where() + "neighbour " + std::to_string(n) + " across face " + std::to_string(i) +
+                       " does not share that face");
+      if (other.n[opposite] != t)
+        return corrupt(where() + "neighbour " + std::to_string(n) + " across face " + std::to_string(i) +
+                       " does not name it back across the shared face");
     }
   }
   if (!level.outerCells.empty()) {
@@ -223,6 +263,13 @@ LevelResult validateLevel(const Level& level) {
           const OuterCell& o = level.outerCells[size_t(n)];
           if (o.n[0] != k && o.n[1] != k && o.n[2] != k)
             return corrupt(where + "link " + std::to_string(n) + " does not name it back");
+          // The linked cell shares the edge opposite v[i] (the outer walk trusts the links as the tet walk
+          // trusts its neighbours).
+          const int32_t a = c.v[(i + 1) % 3], b = c.v[(i + 2) % 3];
+          const auto has = [&](int32_t v) { return o.v[0] == v || o.v[1] == v || o.v[2] == v; };
+          if (!has(a) || !has(b))
+            return corrupt(where + "link " + std::to_string(n) + " does not share the edge opposite probe " +
+                           std::to_string(c.v[i]));
         }
         const glm::vec3 nrm(c.normal[i][0], c.normal[i][1], c.normal[i][2]);
         const float len2 = nrm.x * nrm.x + nrm.y * nrm.y + nrm.z * nrm.z;
@@ -431,13 +478,11 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   return {};
 }
 
-LevelResult loadLevel(const std::string& path, Level& out) {
-  out = Level{};
-  std::vector<char> file;
-  std::string error;
-  if (!readFile(path, file, &error)) return fail(LevelStatus::kCannotOpen, error);
-  const uint8_t* data = reinterpret_cast<const uint8_t*>(file.data());
-  const uint64_t size = file.size();
+namespace {
+
+// loadLevelFromMemory's body; allocation failures (a level the file's bytes back but memory cannot hold)
+// throw std::bad_alloc out of here and are turned into kTooLarge by the caller.
+LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& path, Level& out) {
   const std::string name = path + ": ";
 
   // Magic (a prefix of it in a short file means truncated, anything else is not a level), then version.
@@ -661,6 +706,31 @@ LevelResult loadLevel(const std::string& path, Level& out) {
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);
   out = std::move(level);
   return {};
+}
+
+}  // namespace
+
+LevelResult loadLevelFromMemory(const void* bytes, size_t size, const std::string& name, Level& out) {
+  out = Level{};
+  try {
+    const LevelResult r = parseLevel(static_cast<const uint8_t*>(bytes), size, name, out);
+    if (!r) out = Level{};
+    return r;
+  } catch (const std::exception&) {  // bad_alloc or length_error: nothing else in the parse throws
+    out = Level{};
+    return fail(LevelStatus::kTooLarge,
+                name + ": cannot allocate memory for a level of " + std::to_string(size) + " bytes");
+  }
+}
+
+LevelResult loadLevel(const std::string& path, Level& out, uint64_t maxBytes) {
+  out = Level{};
+  std::vector<char> file;
+  std::string error;
+  bool tooLarge = false;
+  if (!readFile(path, file, &error, maxBytes, &tooLarge))
+    return fail(tooLarge ? LevelStatus::kTooLarge : LevelStatus::kCannotOpen, error);
+  return loadLevelFromMemory(file.data(), file.size(), path, out);
 }
 
 }  // namespace tetraprobe

@@ -85,7 +85,9 @@ uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 // straddling (straddlers are copied into both children); each node keeps the
 // tets that overlap its region (a convex polytope, clipped at every split; a tet touching it only within a
 // rounding margin is dropped), and a node with one tet left, or whose region lies inside one tet, is a leaf
-// naming it. Deterministic for any `threads` (0 = all cores). Allocates the result.
+// naming it. A tet whose cells would lie beyond +-2^30 on an axis (huge coordinates for the cell size) or
+// number more than 4096 is left out, to be found by the walk; no float reaches an int conversion unchecked.
+// Deterministic for any `threads` (0 = all cores). Allocates the result.
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets,
                        float cellSize = 16.0f, int threads = 0);
 

@@ -7,6 +7,7 @@
 // `origin` (double): world = origin + local.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -117,7 +118,8 @@ enum class LevelStatus {
   kUnsupportedVersion,
   kTruncated,
   kCorrupt,
-  kWriteFailed
+  kWriteFailed,
+  kTooLarge,  // the file is larger than the load's byte limit, or its level does not fit in memory
 };
 
 struct LevelResult {
@@ -126,9 +128,18 @@ struct LevelResult {
   explicit operator bool() const { return status == LevelStatus::kOk; }
 };
 
-// Reads `path`. Safe on untrusted input: every count, index and size is validated before use; on failure
-// `out` is left empty and the result names the problem. Allocates the level's arrays.
-LevelResult loadLevel(const std::string& path, Level& out);
+// The default byte limit of loadLevel: 4 GiB (a placed level of a million probes is about 0.4 GiB).
+inline constexpr uint64_t kDefaultMaxLevelBytes = uint64_t(4) << 30;
+
+// Reads `path`. Safe on untrusted input and never throws: every count, index and size is validated before
+// use (docs/level_format.md, "Loading untrusted files"); a file larger than `maxBytes`, or one whose level
+// does not fit in memory, is kTooLarge. On failure `out` is left empty and the result names the file and
+// the problem in one line. Allocates the file's size, then the level's arrays.
+LevelResult loadLevel(const std::string& path, Level& out, uint64_t maxBytes = kDefaultMaxLevelBytes);
+
+// loadLevel on a file already in memory (`size` bytes at `bytes`; an engine's own file system, a pack
+// file, a fuzzer). `name` prefixes the messages in place of the path. Same checks, same results.
+LevelResult loadLevelFromMemory(const void* bytes, size_t size, const std::string& name, Level& out);
 
 // Checks the in-memory invariants (sizes agree, indices in range, finite numbers). Used by load and save.
 LevelResult validateLevel(const Level& level);

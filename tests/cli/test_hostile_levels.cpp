@@ -1,0 +1,281 @@
+// The hostile level set: hand-made bad `.tpb` files (and bad paths), each of which `tetraprobe inspect` must
+// answer with exit 2 and one line on stderr naming the file, never a signal or another code. The files are
+// made here from a real level baked from a small box (a second), byte by byte: truncations, wrong magic and
+// version, bad checksums, and, with the checksums recomputed so the loader's later checks are reached, NaN and
+// huge positions, overflowing counts, huge declared sizes, forged neighbours, flat tets, bad optional sections.
+// Layout facts used (offsets, tags): docs/level_format.md. The README's table of bad inputs lists these.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Bytes = std::vector<uint8_t>;
+
+uint32_t crc32(const uint8_t* p, size_t n) {  // IEEE 802.3, as the format
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) {
+    c ^= p[i];
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+uint32_t getU32(const Bytes& b, size_t at) {
+  uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= uint32_t(b[at + size_t(i)]) << (8 * i);
+  return v;
+}
+uint64_t getU64(const Bytes& b, size_t at) {
+  return uint64_t(getU32(b, at)) | uint64_t(getU32(b, at + 4)) << 32;
+}
+void putU32(Bytes& b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + size_t(i)] = uint8_t(v >> (8 * i));
+}
+void putU64(Bytes& b, size_t at, uint64_t v) {
+  putU32(b, at, uint32_t(v));
+  putU32(b, at + 4, uint32_t(v >> 32));
+}
+void putF32(Bytes& b, size_t at, float v) {
+  uint32_t u;
+  std::memcpy(&u, &v, 4);
+  putU32(b, at, u);
+}
+int32_t getI32(const Bytes& b, size_t at) {
+  return int32_t(getU32(b, at));
+}
+
+// Header, table and payload CRCs recomputed, so a change past them reaches the later checks.
+void fixChecksums(Bytes& b) {
+  putU32(b, 76, crc32(b.data(), 76));
+  const size_t tableEnd = 80 + 24 * size_t(getU32(b, 72)) + 4;
+  if (tableEnd + 4 > b.size()) return;  // a table larger than the file (the loader's own case)
+  putU32(b, tableEnd - 4, crc32(b.data() + 80, tableEnd - 4 - 80));
+  putU32(b, b.size() - 4, crc32(b.data() + 80, b.size() - 4 - 80));
+}
+
+// Offset of the section with this tag (four ASCII characters), from the table.
+size_t section(const Bytes& b, const char* tag) {
+  uint32_t t = 0;
+  std::memcpy(&t, tag, 4);
+  for (uint32_t i = 0; i < getU32(b, 72); ++i)
+    if (getU32(b, 80 + 24 * size_t(i)) == t) return size_t(getU64(b, 80 + 24 * size_t(i) + 8));
+  ADD_FAILURE() << "the level has no " << tag << " section";
+  return 0;
+}
+
+class HostileLevels : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tetraprobe_hostile_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  struct Run {
+    int code = -1;
+    bool signalled = false;
+    std::string err;
+  };
+  Run run(const std::string& args) {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(TETRAPROBE_CLI) + " " + args + " >/dev/null 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    Run r;
+    // system() runs the tool under sh: a signal shows as the shell's exit code 128 + signal.
+    r.signalled = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) >= 128);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.err = ss.str();
+    return r;
+  }
+  fs::path file(const std::string& name, const Bytes& b) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary)
+        .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+const char* kBoxObj =
+    "mtllib box.mtl\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+    "v 1.5 2.99 1.5\nv 2.5 2.99 1.5\nv 2.5 2.99 2.5\nv 1.5 2.99 2.5\nusemtl wall\n"
+    "f 3 2 1\nf 4 3 1\nf 7 8 5\nf 6 7 5\nf 6 5 1\nf 2 6 1\nf 7 6 2\nf 3 7 2\nf 8 7 3\nf 4 8 3\nf 5 8 4\nf 1 "
+    "5 4\n"
+    "usemtl light\nf 11 12 9\nf 10 11 9\n";
+const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
+
+// Every hostile level: exit 2, one line naming the file, no signal. The good level itself loads (exit 0), so
+// each case's failure is its own change.
+TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
+  std::ofstream(dir_ / "box.obj") << kBoxObj;
+  std::ofstream(dir_ / "box.mtl") << kBoxMtl;
+  const fs::path good = dir_ / "good.tpb";
+  const Run bake =
+      run("bake " + (dir_ / "box.obj").string() + " --samples 8 --noise 0 --spacing 1 --fill-holes 0" +
+          " --probe-budget 0 --occlusion planes --threads 2 -o " + good.string());
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  Bytes level;
+  {
+    std::ifstream in(good, std::ios::binary);
+    level.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_GT(level.size(), 200u);
+  ASSERT_EQ(run("inspect " + good.string()).code, 0);
+
+  const size_t prbs = section(level, "PRBS"), shrg = section(level, "SHRG"), tets = section(level, "TETS"),
+               cgr2 = section(level, "CGR2"), kind = section(level, "KIND");
+  const uint64_t tetCount = getU64(level, 56);
+  ASSERT_GE(tetCount, 4u);
+
+  struct Case {
+    std::string name;
+    std::function<void(Bytes&)> edit;  // applied to a copy of the good level
+    bool fixCrc;                       // recompute the checksums after the edit
+  };
+  const auto truncateTo = [](size_t n) { return [n](Bytes& b) { b.resize(std::min(n, b.size())); }; };
+  std::vector<Case> cases = {
+      {"empty", truncateTo(0), false},
+      {"truncated_magic", truncateTo(5), false},
+      {"truncated_header", truncateTo(60), false},
+      {"truncated_table", truncateTo(100), false},
+      {"truncated_payload", [](Bytes& b) { b.resize(b.size() / 2); }, false},
+      {"truncated_last_byte", [](Bytes& b) { b.pop_back(); }, false},
+      {"trailing_bytes", [](Bytes& b) { b.insert(b.end(), 16, 0); }, false},
+      {"wrong_magic", [](Bytes& b) { b[1] = 'X'; }, false},
+      {"text_file",
+       [](Bytes& b) {
+         b.assign({'h', 'e', 'l', 'l', 'o', '\n'});
+       },
+       false},
+      {"version_2", [](Bytes& b) { putU32(b, 8, 2); }, false},
+      {"version_99", [](Bytes& b) { putU32(b, 8, 99); }, false},
+      {"bad_header_crc", [](Bytes& b) { b[40] ^= 1; }, false},
+      {"bad_table_crc", [](Bytes& b) { b[90] ^= 1; }, false},
+      {"bad_payload_crc", [&](Bytes& b) { b[shrg + 5] ^= 1; }, false},
+      {"header_size", [](Bytes& b) { putU32(b, 12, 96); }, true},
+      {"content_flags", [](Bytes& b) { putU32(b, 16, 0xFF); }, true},
+      {"sh_order_3", [](Bytes& b) { putU32(b, 20, 3); }, true},
+      {"nan_origin", [](Bytes& b) { putU64(b, 24, 0x7FF8000000000000ull); }, true},
+      {"probe_count_overflow", [](Bytes& b) { putU64(b, 48, ~0ull); }, true},
+      {"tet_count_beyond_int32", [](Bytes& b) { putU64(b, 56, 1ull << 40); }, true},
+      {"tet_count_huge_in_range", [](Bytes& b) { putU64(b, 56, 2'000'000'000ull); }, true},
+      {"generator_huge", [](Bytes& b) { putU64(b, 64, 1ull << 40); }, true},
+      {"section_count_huge", [](Bytes& b) { putU32(b, 72, 100000); }, true},
+      {"section_size_huge", [](Bytes& b) { putU64(b, 80 + 24 * 3 + 16, 1ull << 50); }, true},
+      {"section_offset_gap", [](Bytes& b) { putU64(b, 80 + 24 + 8, getU64(b, 80 + 24 + 8) + 4); }, true},
+      {"unknown_required_section", [](Bytes& b) { putU32(b, 80 + 24 * 3, 0x5A5A5A5A); }, true},
+      {"repeated_section", [](Bytes& b) { putU32(b, 80 + 24 * 3, getU32(b, 80 + 24 * 2)); }, true},
+      {"nan_position", [&](Bytes& b) { putU32(b, prbs + 4, 0x7FC00000u); }, true},
+      {"inf_position", [&](Bytes& b) { putF32(b, prbs + 8, std::numeric_limits<float>::infinity()); }, true},
+      {"huge_position", [&](Bytes& b) { putF32(b, prbs, 1e30f); }, true},
+      {"nan_sh", [&](Bytes& b) { putU32(b, shrg + 12, 0x7FC00000u); }, true},
+      {"vertex_out_of_range", [&](Bytes& b) { putU32(b, tets + 4, 1u << 30); }, true},
+      {"vertex_negative", [&](Bytes& b) { putU32(b, tets + 8, uint32_t(-7)); }, true},
+      {"vertex_repeated", [&](Bytes& b) { putU32(b, tets + 4, getU32(b, tets)); }, true},
+      {"neighbour_self", [&](Bytes& b) { putU32(b, tets + 16, 0); }, true},
+      // A hull face given a neighbour that does not name it back.
+      {"neighbour_one_sided",
+       [&](Bytes& b) {
+         for (size_t t = 0; t < tetCount; ++t)
+           for (size_t i = 0; i < 4; ++i)
+             if (getI32(b, tets + 32 * t + 16 + 4 * i) < 0) {
+               putU32(b, tets + 32 * t + 16 + 4 * i, uint32_t((t + tetCount / 2) % tetCount));
+               return;
+             }
+         ADD_FAILURE() << "no hull face";
+       },
+       true},
+      // Two adjacent pairs (a|b, c|d) rewired as a|c and b|d: every link is mutual, but no face is shared,
+      // which the loader checked before only by symmetry (walks would wander, then scan every tet).
+      {"forged_neighbours",
+       [&](Bytes& b) {
+         const auto nAt = [&](int64_t t, int i) { return tets + 32 * size_t(t) + 16 + 4 * size_t(i); };
+         const auto faceTo = [&](int64_t t, int64_t u) {
+           for (int i = 0; i < 4; ++i)
+             if (getI32(b, nAt(t, i)) == u) return i;
+           return -1;
+         };
+         int64_t a = -1, bb = -1, c = -1, d = -1;
+         for (int64_t t = 0; t < int64_t(tetCount) && d < 0; ++t)
+           for (int i = 0; i < 4 && d < 0; ++i) {
+             const int64_t u = getI32(b, nAt(t, i));
+             if (u <= t) continue;
+             if (a < 0) {
+               a = t, bb = u;
+             } else if (t != a && t != bb && u != a && u != bb) {
+               c = t, d = u;
+             }
+           }
+         ASSERT_GE(d, 0) << "no two disjoint adjacent pairs";
+         const int ab = faceTo(a, bb), ba = faceTo(bb, a), cd = faceTo(c, d), dc = faceTo(d, c);
+         putU32(b, nAt(a, ab), uint32_t(c));
+         putU32(b, nAt(c, cd), uint32_t(a));
+         putU32(b, nAt(bb, ba), uint32_t(d));
+         putU32(b, nAt(d, dc), uint32_t(bb));
+       },
+       true},
+      // Tet 0's second probe moved onto its first: flat in float (the build refuses such tets too).
+      {"flat_tet",
+       [&](Bytes& b) {
+         const size_t from = prbs + 12 * size_t(getU32(b, tets)),
+                      to = prbs + 12 * size_t(getU32(b, tets + 4));
+         std::memmove(b.data() + to, b.data() + from, 12);
+       },
+       true},
+      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr2 + 12, 0.0f); }, true},
+      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr2 + 48, 1ull << 33); }, true},
+      {"probe_kind_unknown", [&](Bytes& b) { b[kind] = 200; }, true},
+  };
+
+  for (const Case& c : cases) {
+    Bytes b = level;
+    c.edit(b);
+    if (c.fixCrc) fixChecksums(b);
+    const fs::path p = file(c.name + ".tpb", b);
+    const Run r = run("inspect " + p.string());
+    if (std::getenv("TETRAPROBE_TEST_VERBOSE"))
+      std::fprintf(stderr, "%-26s %d %s", c.name.c_str(), r.code, r.err.c_str());
+    EXPECT_FALSE(r.signalled) << c.name << ": killed by a signal: " << r.err;
+    EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(p.filename().string()), std::string::npos) << c.name << ": " << r.err;
+  }
+
+  // Paths that are not level files at all: missing, a directory, a device, a file over the size limit
+  // (sparse: 5 GiB declared, nothing written).
+  const fs::path big = dir_ / "huge.tpb";
+  std::ofstream(big).put('x');
+  fs::resize_file(big, uint64_t(5) << 30);
+  for (const std::string& p :
+       {(dir_ / "missing.tpb").string(), dir_.string(), std::string("/dev/zero"), big.string()}) {
+    const Run r = run("inspect " + p);
+    EXPECT_FALSE(r.signalled) << p << ": " << r.err;
+    EXPECT_EQ(r.code, 2) << p << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << p << ": " << r.err;
+  }
+  const Run r = run("inspect " + big.string());
+  EXPECT_NE(r.err.find("more than the limit"), std::string::npos) << r.err;
+}
+
+}  // namespace
