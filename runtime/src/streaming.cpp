@@ -102,6 +102,7 @@ struct StreamingLevel::File {
   std::ifstream in;
   uint64_t probes = 0, sh = 0, tets = 0;  // section offsets
   uint64_t occl = 0;                      // 0: no occlusion section
+  uint64_t strm = 0;                      // the streaming index section
   uint64_t probeCount = 0, tetCount = 0, planeCount = 0, blockCount = 0;
   uint32_t content = 0, shOrder = 2;
 
@@ -227,11 +228,19 @@ LevelResult StreamingLevel::open(const std::string& path) {
   if (strm == 0) return fail(LevelStatus::kCorrupt, name + "no streaming index (add one: tetraprobe stream)");
 
   // The index: header, sector records, tet and probe references, nodes, coarse set.
-  index_.resize(size_t(strmSize));
+  // Held: the header and the sector records. A sector's references and nodes are read when it is loaded.
+  index_.resize(size_t(kStreamHeaderBytes));
   if (strmSize < kStreamHeaderBytes || !f->read(strm, index_.data(), index_.size()))
     return fail(LevelStatus::kCorrupt, name + "streaming index shorter than its header");
+  const uint32_t sectorCount = u32At(index_.data() + 4);
+  if (kStreamHeaderBytes + kSectorBytes * sectorCount > strmSize)
+    return fail(LevelStatus::kCorrupt, name + "streaming index shorter than its sector records");
+  index_.resize(size_t(kStreamHeaderBytes + kSectorBytes * sectorCount));
+  if (!f->read(strm + kStreamHeaderBytes, index_.data() + kStreamHeaderBytes,
+               index_.size() - kStreamHeaderBytes))
+    return fail(LevelStatus::kCannotOpen, name + "read failed");
+  f->strm = strm;
   const uint8_t* x = index_.data();
-  const uint32_t sectorCount = u32At(x + 4);
   for (int a = 0; a < 3; ++a) grid_.min[a] = f32At(x + 8 + 4 * a);
   grid_.cellSize = f32At(x + 20);
   const uint64_t tetRefs = u64At(x + 24), probeRefs = u64At(x + 32), nodes = u64At(x + 40);
@@ -255,13 +264,15 @@ LevelResult StreamingLevel::open(const std::string& path) {
       return fail(LevelStatus::kCorrupt, where + "ranges out of bounds");
     keys_.push_back(key);
   }
-  (void)nodesAt;
-  (void)coarseAt;
+
   // The coarse set: a level of its own (no occlusion, no grid: its query builds one).
   coarse_.content = f->content;
   coarse_.shOrder = f->shOrder;
   coarse_.origin = origin_;
-  const uint8_t* c = x + coarseAt;
+  std::vector<uint8_t> coarseBytes(size_t(120 * coarseProbes + 32 * coarseTets));
+  if (!f->read(strm + coarseAt, coarseBytes.data(), coarseBytes.size()))
+    return fail(LevelStatus::kCannotOpen, name + "read failed");
+  const uint8_t* c = coarseBytes.data();
   coarse_.probes.resize(size_t(coarseProbes));
   coarse_.sh.resize(size_t(coarseProbes));
   coarse_.tets.resize(size_t(coarseTets));
@@ -313,9 +324,16 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   File& f = *file_;
   auto s = std::make_unique<Sector>();
   auto bad = [&](const std::string& why) { return fail(LevelStatus::kCorrupt, where + why); };
-  for (uint32_t k = 0; k < r.tetCount; ++k) s->tetIds.push_back(u32At(x + refsAt + 4 * (r.tetFirst + k)));
+  // The sector's references and nodes, from the index in the file.
+  std::vector<uint8_t> refs(4 * (size_t(r.tetCount) + r.probeCount)), nodeBytes(24 * size_t(r.nodeCount));
+  if (!f.read(f.strm + refsAt + 4ull * r.tetFirst, refs.data(), 4 * size_t(r.tetCount)) ||
+      !f.read(f.strm + refsAt + 4 * (tetRefs + r.probeFirst), refs.data() + 4 * size_t(r.tetCount),
+              4 * size_t(r.probeCount)) ||
+      !f.read(f.strm + nodesAt + 24ull * r.nodeFirst, nodeBytes.data(), nodeBytes.size()))
+    return fail(LevelStatus::kCannotOpen, where + "read failed");
+  for (uint32_t k = 0; k < r.tetCount; ++k) s->tetIds.push_back(u32At(refs.data() + 4 * k));
   for (uint32_t k = 0; k < r.probeCount; ++k)
-    s->probeIds.push_back(u32At(x + refsAt + 4 * (tetRefs + r.probeFirst + k)));
+    s->probeIds.push_back(u32At(refs.data() + 4 * (r.tetCount + k)));
   for (size_t k = 0; k < s->tetIds.size(); ++k)
     if (s->tetIds[k] >= f.tetCount || (k > 0 && s->tetIds[k] <= s->tetIds[k - 1]))
       return bad("tet references out of range or not increasing");
@@ -331,7 +349,7 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   s->root = r.root;
   s->nodes.resize(r.nodeCount);
   for (uint32_t k = 0; k < r.nodeCount; ++k) {
-    const uint8_t* p = x + nodesAt + 24 * uint64_t(r.nodeFirst + k);
+    const uint8_t* p = nodeBytes.data() + 24 * size_t(k);
     BspNode& n = s->nodes[k];
     for (int a = 0; a < 4; ++a) n.plane[a] = f32At(p + 4 * a);
     n.child[0] = i32At(p + 16);

@@ -282,7 +282,7 @@ TEST_F(Cli, MergeRefusesPartsThatDoNotBelongTogether) {
 // A level streamed sector by sector (tetraprobe stream, StreamingLevel) answers bit for bit as the fully
 // loaded level at every point inside the level's tets in a loaded sector, finitely from the coarse set everywhere
 // else, and reports less memory after each unload. The sample's rooms scaled 5x (41 x 15 x 21 m) span
-// several 16 m cells; occlusion is on, so its records are streamed too. About 5 s.
+// several 16 m cells (12 sectors); occlusion is on, so its records are streamed too. About 1 s.
 TEST_F(Cli, StreamedLevelAnswersLikeTheFullLevel) {
   write("big.scene.json",
         std::string("{\"mesh\": \"") + TETRAPROBE_SOURCE_DIR +

@@ -1,12 +1,16 @@
 // `tetraprobe stream LEVEL.tpb -o OUT.tpb`: adds the streaming index (section STRM: per-sector ranges and a
 // coarse probe set, tetra/stream_index.h) to a baked level, so an engine can load it sector by sector
 // (runtime/streaming.h, docs/streaming.md). The rest of the file is unchanged.
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
 
 #include "args.h"
 #include "commands.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/streaming.h"
 #include "tetraprobe/tetra/stream_index.h"
 
 namespace tetraprobe::cli {
@@ -18,7 +22,11 @@ int cmdStream(int argc, char** argv) {
             "--coarse-spacing metres, tetrahedralized) that answers where no sector is loaded. Written\n"
             "atomically; the level's other sections keep their bytes (docs/streaming.md).",
             {{"--output", "-o", "OUT.tpb", "level file to write (may be LEVEL.tpb itself)", ""},
-             {"--coarse-spacing", "", "METRES", "coarse set: one probe per cube of this edge", "8"}});
+             {"--coarse-spacing", "", "METRES", "coarse set: one probe per cube of this edge", "8"},
+             {"--measure", "", "",
+              "then open the written file as an engine would (StreamingLevel) and report the memory in use "
+              "idle and with each sector loaded alone",
+              ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
   if (!args.has("--output")) throw UsageError("missing -o OUT.tpb");
@@ -39,6 +47,29 @@ int cmdStream(int argc, char** argv) {
       level.tets.empty() ? 0.0 : double(stats.tetRefs) / double(level.tets.size()),
       level.probes.empty() ? 0.0 : double(stats.probeRefs) / double(level.probes.size()), stats.nodes,
       stats.maxSectorBytes, stats.coarseProbes, stats.coarseSpacing, stats.coarseTets, stats.bytes);
+  if (args.has("--measure")) {
+    StreamingLevel st;
+    if (const LevelResult r = st.open(args.str("--output")); !r) throw std::runtime_error(r.message);
+    const size_t idle = st.bytesInUse();
+    size_t lo = SIZE_MAX, hi = 0, sum = 0;
+    double seconds = 0.0;
+    for (const SectorKey& key : st.sectors()) {
+      const auto t0 = std::chrono::steady_clock::now();
+      if (const LevelResult r = st.load(key); !r) throw std::runtime_error(r.message);
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const size_t b = st.bytesInUse() - idle;
+      lo = std::min(lo, b);
+      hi = std::max(hi, b);
+      sum += b;
+      st.unload(key);
+    }
+    std::printf("  load    %.2f ms a sector (mean; reads, joins, builds the query)\n",
+                st.sectors().empty() ? 0.0 : 1e3 * seconds / double(st.sectors().size()));
+    std::printf(
+        "  memory  idle %zu bytes (index + coarse set); one sector loaded: +%zu min, +%.0f mean, +%zu max\n",
+        idle, st.sectors().empty() ? 0 : lo,
+        st.sectors().empty() ? 0.0 : double(sum) / double(st.sectors().size()), hi);
+  }
   return 0;
 }
 

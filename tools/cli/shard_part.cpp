@@ -3,6 +3,7 @@
 #include "shard_part.h"
 
 #include <bit>
+#include <climits>
 #include <cstring>
 #include <string_view>
 #include <vector>
@@ -184,6 +185,7 @@ ShardPart readShardPart(const std::string& path) {
   if (p.count == 0 || p.index >= p.count)
     r.fail("shard index " + std::to_string(p.index) + " of " + std::to_string(p.count));
   p.probeCount = r.get<uint64_t>();
+  if (p.probeCount > uint64_t(INT32_MAX)) r.fail("implausible probe count " + std::to_string(p.probeCount));
   p.sceneHash = r.get<uint64_t>();
   p.bake.floor = r.get<double>();
   const uint64_t optionBytes = r.get<uint64_t>();

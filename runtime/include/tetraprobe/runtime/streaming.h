@@ -40,8 +40,9 @@ class StreamingLevel {
   StreamingLevel& operator=(const StreamingLevel&) = delete;
 
   // Opens a level file with a STRM section: checks the header, the section table and the payload checksum
-  // (one sequential pass over the file, in 64 KiB pieces), reads the streaming index and builds the coarse
-  // set's query. Holds the file open. Nothing of the fine level is loaded yet. Never throws; on failure the
+  // (one sequential pass over the file, in 64 KiB pieces), reads the index's header and sector records (40
+  // bytes a sector) and the coarse set, and builds the coarse set's query. Holds the file open. Nothing of
+  // the fine level is loaded yet: a sector's references and BSP nodes are read by load(). Never throws; on failure the
   // object is closed and the message names the file and the problem (kCorrupt for a bad or missing index).
   LevelResult open(const std::string& path);
 
@@ -52,7 +53,8 @@ class StreamingLevel {
   bool hasSector(const SectorKey& key) const;
   bool isLoaded(const SectorKey& key) const { return loaded_.count(key) > 0; }
 
-  // Reads a sector's tets, probes, SH, occlusion and BSP from the file and rebuilds the loaded level
+  // Reads a sector's references and BSP from the index and its tets, probes, SH and occlusion from the
+  // level's sections (seeks), and rebuilds the loaded level
   // (the union of the loaded sectors; cost proportional to it). Loading a loaded sector does nothing.
   // kCorrupt when the sector's records fail validation; kCannotOpen when the file cannot be read; the key
   // not being a sector of the file is kCorrupt too. Not to be called while other threads query.
@@ -84,7 +86,7 @@ class StreamingLevel {
   std::string path_;
   std::unique_ptr<File> file_;
   std::vector<SectorKey> keys_;
-  std::vector<uint8_t> index_;  // the STRM section
+  std::vector<uint8_t> index_;  // the STRM section's header and sector records
   Level coarse_;
   std::unique_ptr<ProbeQuery> coarseQuery_;
   std::map<SectorKey, std::unique_ptr<Sector>> loaded_;
