@@ -232,10 +232,48 @@ void addDeltaToSh(ShRgb& sh, const glm::vec3& dir, const glm::vec3& irradiance) 
     for (int c = 0; c < 3; ++c) sh.c[i][c] = float(double(sh.c[i][c]) + double(irradiance[c]) * y[i]);
 }
 
-std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
-                              const BakeOptions& options, BakeStats* stats,
-                              const std::vector<uint8_t>* skip) {
+namespace {
+
+// A sharded bake's role in bakeProbesImpl: a shard (passes 1-2 for the probes `own` names, states out), or
+// the merge (every probe's state after pass 2 in, passes 3 and the SH out). Null: the whole bake.
+struct ShardRole {
+  const std::vector<uint8_t>* own = nullptr;  // shard: the probes it takes to pass 2
+  ShardBake* out = nullptr;                   // shard: their states
+  const ShardBake* resume = nullptr;          // merge: every traced probe's state
+  bool pass1Only = false;                     // round 1: pass 1 of the own probes only, states out
+  const ShardBake* pass1 = nullptr;           // round 2: the own probes' pass-1 states and the floor
+};
+
+void toState(const AdaptiveProbe& a, ProbeBakeState& s) {
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int c = 0; c < 3; ++c) s.acc[i][c] = a.acc[i][c];
+  s.batches = a.batches;
+  for (int k = 0; k < 6; ++k) {
+    s.mean[k] = a.mean[k];
+    s.m2[k] = a.m2[k];
+  }
+}
+
+void fromState(const ProbeBakeState& s, AdaptiveProbe& a) {
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int c = 0; c < 3; ++c) a.acc[i][c] = s.acc[i][c];
+  a.batches = s.batches;
+  for (int k = 0; k < 6; ++k) {
+    a.mean[k] = s.mean[k];
+    a.m2[k] = s.m2[k];
+  }
+}
+
+std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                                  const BakeOptions& options, BakeStats* stats,
+                                  const std::vector<uint8_t>* skip, const ShardRole& role) {
   validateBakeOptions(options);
+  const bool sharded = role.own != nullptr || role.resume != nullptr;
+  const auto own = [&](size_t i) { return role.own == nullptr || (*role.own)[i] != 0; };
+  if (sharded && !(options.targetRelError > 0.0))
+    throw InputError("bake: a sharded bake needs adaptive sampling (a target error > 0)");
+  if (role.own && role.own->size() != probes.size())
+    throw std::invalid_argument("bakeProbesShard: ownership mask size differs from the probe count");
   if (skip && skip->size() != probes.size())
     throw std::invalid_argument("bakeProbes: skip mask size differs from the probe count");
   auto skipped = [&](size_t i) { return skip != nullptr && (*skip)[i] != 0; };
@@ -244,7 +282,8 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
       throw InputError("bake: probe " + std::to_string(i) + " has a non-finite position");
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<ShRgb> out(probes.size());
-  std::vector<RayTap> taps(stats ? probes.size() : 0);  // per probe: sums independent of the threads
+  // Per probe: sums independent of the threads (a shard always counts: its part file carries them).
+  std::vector<RayTap> taps(stats || sharded ? probes.size() : 0);
   std::unique_ptr<Progress> progress;
   const bool adaptive = options.targetRelError > 0.0;
   std::vector<int> paths(probes.size(), options.samplesPerProbe);
@@ -271,52 +310,121 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     const int maxBatches = std::max(minBatches, options.maxSamplesPerProbe / kBakeBatchSize);
     std::vector<AdaptiveProbe> state(probes.size());
     auto run = [&](size_t i, auto&& body) {
-      if (stats) {
+      if (!taps.empty()) {
         RayTapScope scope(taps[i]);
         body();
       } else {
         body();
       }
     };
-    // Pass 1: every probe's minimum; then the floor from the level's median; pass 2: each probe to its target.
-    if (options.progress) progress = std::make_unique<Progress>("bake (pass 1)", probes.size(), "probes");
-    parallelFor(probes.size(), options.threads, [&](size_t i) {
-      if (!skipped(i))
+    double floor = 0.0;
+    achieved.assign(probes.size(), -1.0);
+    if (role.resume) {
+      // The merge: every traced probe's state after pass 2 comes from the shards, exactly once.
+      const ShardBake& r = *role.resume;
+      if (r.probes.size() != r.states.size())
+        throw std::invalid_argument("bakeProbesMerged: probe and state counts differ");
+      std::vector<uint8_t> seen(probes.size(), 0);
+      for (size_t k = 0; k < r.probes.size(); ++k) {
+        const uint32_t i = r.probes[k];
+        if (i >= probes.size() || skipped(i) || seen[i])
+          throw InputError("bake merge: shard state for probe " + std::to_string(i) +
+                           (i >= probes.size() ? " is out of range"
+                            : skipped(i)       ? " that is not traced"
+                                               : " given twice"));
+        const ProbeBakeState& s = r.states[k];
+        if (s.batches < minBatches || s.batches > maxBatches)
+          throw InputError("bake merge: shard state for probe " + std::to_string(i) + " is inconsistent");
+        seen[i] = 1;
+        fromState(s, state[i]);
+        achieved[i] = s.achieved;
+        taps[i].intersects = s.intersectRays;
+        taps[i].occludeds = s.occludedRays;
+      }
+      for (size_t i = 0; i < probes.size(); ++i) {
+        if (!skipped(i) && !seen[i])
+          throw InputError("bake merge: no shard holds probe " + std::to_string(i));
+        paths[i] = skipped(i) ? 0 : state[i].batches * kBakeBatchSize;
+      }
+      floor = r.floor;
+    } else {
+      // Pass 1: every probe's minimum; then the floor from the level's median; pass 2: each probe to its target.
+      // A shard runs pass 1 for every probe (the floor is the median over all of them), pass 2 for its own;
+      // in two rounds, round 1 runs pass 1 of its own probes and round 2 takes those and the floor.
+      if (role.pass1) {
+        const ShardBake& r = *role.pass1;
+        std::vector<uint8_t> seen(probes.size(), 0);
+        for (size_t k = 0; k < r.probes.size() && k < r.states.size(); ++k) {
+          const uint32_t i = r.probes[k];
+          if (i >= probes.size() || skipped(i) || !own(i) || seen[i] || r.states[k].batches != minBatches)
+            throw InputError("bake: round-1 state for probe " + std::to_string(i) +
+                             " does not belong to this shard");
+          seen[i] = 1;
+          fromState(r.states[k], state[i]);
+          taps[i].intersects = r.states[k].intersectRays;
+          taps[i].occludeds = r.states[k].occludedRays;
+        }
+        for (size_t i = 0; i < probes.size(); ++i)
+          if (!skipped(i) && own(i) && !seen[i])
+            throw InputError("bake: no round-1 state for probe " + std::to_string(i));
+        floor = r.floor;
+      } else {
+        if (options.progress) progress = std::make_unique<Progress>("bake (pass 1)", probes.size(), "probes");
+        parallelFor(probes.size(), options.threads, [&](size_t i) {
+          if (!skipped(i) && (!role.pass1Only || own(i)))
+            run(i, [&] {
+              DenormalScope denormals;
+              while (state[i].batches < minBatches)
+                addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+            });
+          if (progress) progress->advance();
+        });
+        if (progress) progress->finish();
+        std::vector<double> means;
+        for (size_t i = 0; i < probes.size(); ++i)
+          if (!skipped(i)) means.push_back(std::abs(adaptiveMean(state[i])));
+        floor = bakeErrorFloor(std::move(means));
+      }
+      if (role.pass1Only) {
+        floor = std::numeric_limits<double>::quiet_NaN();  // not known until every shard's pass 1 is
+        std::fill(achieved.begin(), achieved.end(), -1.0);
+      }
+      if (options.progress && !role.pass1Only)
+        progress = std::make_unique<Progress>("bake (to target)", probes.size(), "probes");
+      parallelFor(role.pass1Only ? 0 : probes.size(), options.threads, [&](size_t i) {
+        if (skipped(i) || !own(i)) {
+          paths[i] = 0;
+          if (progress) progress->advance();
+          return;
+        }
         run(i, [&] {
           DenormalScope denormals;
-          while (state[i].batches < minBatches) addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+          AdaptiveProbe& st = state[i];
+          while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
+            addBatch(tracer, glm::vec3(probes[i]), i, options, st);
+          achieved[i] = adaptiveRelError(st, floor);
         });
-      if (progress) progress->advance();
-    });
-    if (progress) progress->finish();
-    std::vector<double> means;
-    for (size_t i = 0; i < probes.size(); ++i)
-      if (!skipped(i)) means.push_back(std::abs(adaptiveMean(state[i])));
-    double median = 0.0;
-    if (!means.empty()) {
-      std::nth_element(means.begin(), means.begin() + long(means.size() / 2), means.end());
-      median = means[means.size() / 2];
-    }
-    const double floor = kBakeErrorFloor * median;
-    if (options.progress) progress = std::make_unique<Progress>("bake (to target)", probes.size(), "probes");
-    achieved.assign(probes.size(), -1.0);
-    parallelFor(probes.size(), options.threads, [&](size_t i) {
-      if (skipped(i)) {
-        paths[i] = 0;
+        paths[i] = state[i].batches * kBakeBatchSize;
         if (progress) progress->advance();
-        return;
-      }
-      run(i, [&] {
-        DenormalScope denormals;
-        AdaptiveProbe& st = state[i];
-        while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
-          addBatch(tracer, glm::vec3(probes[i]), i, options, st);
-        achieved[i] = adaptiveRelError(st, floor);
       });
-      paths[i] = state[i].batches * kBakeBatchSize;
-      if (progress) progress->advance();
-    });
-    if (progress) progress->finish();
+      if (progress) progress->finish();
+      if (role.out) {
+        ShardBake& out = *role.out;
+        out = ShardBake{};
+        out.floor = floor;
+        for (size_t i = 0; i < probes.size(); ++i) {
+          if (skipped(i) || !own(i)) continue;
+          ProbeBakeState s;
+          toState(state[i], s);
+          s.achieved = achieved[i];
+          s.intersectRays = taps[i].intersects;
+          s.occludedRays = taps[i].occludeds;
+          out.probes.push_back(uint32_t(i));
+          out.states.push_back(s);
+        }
+        return {};
+      }
+    }
     // Pass 3 (BakeOptions::pathBudget): the unspent budget shared evenly among the probes above the target.
     auto batchesUsed = [&] {
       uint64_t n = 0;
@@ -386,6 +494,91 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                              const BakeOptions& options, BakeStats* stats,
+                              const std::vector<uint8_t>* skip) {
+  return bakeProbesImpl(tracer, probes, options, stats, skip, ShardRole{});
+}
+
+ShardBake bakeProbesShard(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                          const BakeOptions& options, const std::vector<uint8_t>& own,
+                          const std::vector<uint8_t>* skip) {
+  ShardBake out;
+  ShardRole role;
+  role.own = &own;
+  role.out = &out;
+  bakeProbesImpl(tracer, probes, options, nullptr, skip, role);
+  return out;
+}
+
+ShardBake bakeProbesShardPass1(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                               const BakeOptions& options, const std::vector<uint8_t>& own,
+                               const std::vector<uint8_t>* skip) {
+  ShardBake out;
+  ShardRole role;
+  role.own = &own;
+  role.out = &out;
+  role.pass1Only = true;
+  bakeProbesImpl(tracer, probes, options, nullptr, skip, role);
+  return out;
+}
+
+ShardBake bakeProbesShardPass2(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                               const BakeOptions& options, const std::vector<uint8_t>& own,
+                               const ShardBake& pass1, const std::vector<uint8_t>* skip) {
+  ShardBake out;
+  ShardRole role;
+  role.own = &own;
+  role.out = &out;
+  role.pass1 = &pass1;
+  bakeProbesImpl(tracer, probes, options, nullptr, skip, role);
+  return out;
+}
+
+double probeBakeMean(const ProbeBakeState& state) {
+  AdaptiveProbe a;
+  fromState(state, a);
+  return std::abs(adaptiveMean(a));
+}
+
+double bakeErrorFloor(std::vector<double> means) {
+  double median = 0.0;
+  if (!means.empty()) {
+    std::nth_element(means.begin(), means.begin() + long(means.size() / 2), means.end());
+    median = means[means.size() / 2];
+  }
+  return kBakeErrorFloor * median;
+}
+
+std::vector<ShRgb> bakeProbesMerged(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                                    const BakeOptions& options, const ShardBake& merged, BakeStats* stats,
+                                    const std::vector<uint8_t>* skip) {
+  ShardRole role;
+  role.resume = &merged;
+  return bakeProbesImpl(tracer, probes, options, stats, skip, role);
+}
+
+std::vector<uint8_t> shardOwnership(const std::vector<glm::dvec3>& probes, int index, int count) {
+  if (count < 1 || index < 0 || index >= count)
+    throw std::invalid_argument("shardOwnership: shard " + std::to_string(index) + " of " +
+                                std::to_string(count));
+  std::vector<uint32_t> order(probes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const glm::dvec3 &pa = probes[a], &pb = probes[b];
+    if (pa.x != pb.x) return pa.x < pb.x;
+    if (pa.y != pb.y) return pa.y < pb.y;
+    if (pa.z != pb.z) return pa.z < pb.z;
+    return a < b;
+  });
+  const size_t n = probes.size(), c = size_t(count), k = size_t(index);
+  std::vector<uint8_t> own(n, 0);
+  for (size_t r = k * n / c; r < (k + 1) * n / c; ++r) own[order[r]] = 1;
+  return own;
 }
 
 }  // namespace tetraprobe

@@ -17,6 +17,8 @@
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
 
+#include "crc32.h"
+
 namespace tetraprobe {
 namespace {
 
@@ -50,7 +52,7 @@ constexpr uint32_t tag(const char (&s)[5]) {
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
                    kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
-                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND");
+                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
@@ -58,24 +60,7 @@ constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
 constexpr uint64_t kCellGridHeaderBytes = 64;
 constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24;
 
-// CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, as zlib's crc32()).
-constexpr std::array<uint32_t, 256> makeCrcTable() {
-  std::array<uint32_t, 256> t{};
-  for (uint32_t i = 0; i < 256; ++i) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    t[i] = c;
-  }
-  return t;
-}
-constexpr std::array<uint32_t, 256> kCrcTable = makeCrcTable();
-
-uint32_t crc32(const uint8_t* p, size_t n) {
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) c = kCrcTable[(c ^ p[i]) & 0xFFu] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
-}
-static_assert(makeCrcTable()[1] == 0x77073096u, "CRC-32 table matches zlib");
+using runtime_detail::crc32;  // crc32.h
 
 // --- writing ---------------------------------------------------------------------------------------------
 class Writer {
@@ -448,6 +433,11 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     }
   }
 
+  if (!level.stream.empty()) {  // streaming index (streaming.h), opaque here; none writes no section
+    sections.push_back({kTagStream, 0, {}});
+    sections.back().bytes.bytes(level.stream.data(), level.stream.size());
+  }
+
   Writer w;
   w.bytes(kMagic.data(), kMagic.size());
   w.u32(kVersion);
@@ -534,7 +524,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, tets, generator, outer, cellGrid, occlusion, kinds;
+  Section probes, sh, tets, generator, outer, cellGrid, occlusion, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -552,6 +542,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                      : t == kTagCellGrid   ? &cellGrid
                      : t == kTagOcclusion  ? &occlusion
                      : t == kTagProbeKinds ? &kinds
+                     : t == kTagStream     ? &stream
                                            : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
@@ -701,6 +692,11 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     const auto* k = data + kinds.offset;
     level.probeKinds.resize(size_t(probeCount));
     for (size_t i = 0; i < level.probeKinds.size(); ++i) level.probeKinds[i] = LevelProbeKind(k[i]);
+  }
+
+  if (stream.present) {  // kept as bytes; StreamingLevel (streaming.cpp) parses and checks it
+    const auto* b = data + stream.offset;
+    level.stream.assign(b, b + stream.size);
   }
 
   if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);

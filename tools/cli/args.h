@@ -34,6 +34,8 @@ class Args {
   bool parse(int argc, char** argv);
 
   const std::vector<std::string>& positional() const { return positional_; }
+  // The options given, by canonical name (aliases resolved), in name order; flags hold "1".
+  const std::map<std::string, std::string>& values() const { return values_; }
   void requirePositional(size_t min, size_t max) const;
 
   bool has(const std::string& name) const;

@@ -7,12 +7,13 @@
 #include "args.h"
 #include "commands.h"
 #include "pipeline.h"
+#include "shard_part.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
 
-int cmdBake(int argc, char** argv) {
+int runBake(int argc, char** argv, const MergedShards* merge) {
   Args args(
       "tetraprobe bake SCENE -o LEVEL.tpb [options]",
       "Bakes a level: places probes, path-traces each probe's incident radiance into SH L2 RGB,\n"
@@ -90,7 +91,18 @@ int cmdBake(int argc, char** argv) {
         "refinement: how far in front of its surface point a new probe sits at most (half the free "
         "distance when less); auto = spacing / 8, close enough to see what the surface sees",
         "auto"},
-       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"}});
+       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"},
+       {"--shard", "", "I/N",
+        "sharded bake (docs/distributed.md): place the probes, trace passes 1-2 of shard I's probes (of N "
+        "equal-count x slabs) and write their states to -o as a part file for `tetraprobe merge`",
+        ""},
+       {"--round", "", "both|1|2",
+        "with --shard: both = passes 1-2 in one run (pass 1 of every probe is traced by every shard); "
+        "1 = pass 1 of the shard's probes only; 2 = pass 2, from --resume and --floor",
+        "both"},
+       {"--floor", "", "FILE",
+        "--round 2: the floor part `tetraprobe merge --floor` made of the round-1 parts", ""},
+       {"--resume", "", "FILE", "--round 2: this shard's round-1 part", ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
   if (!args.has("--output")) throw UsageError("missing -o LEVEL.tpb");
@@ -179,14 +191,103 @@ int cmdBake(int argc, char** argv) {
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
 
+  // Sharding: every option that can change the level, canonical, so the merge can check the shards agree
+  // and bake with the same options (output, report, threads and the shard itself never change it).
+  std::string canonical = scenePath + "\n";
+  for (const auto& [name, value] : args.values()) {
+    if (name == "--output" || name == "--report" || name == "--threads" || name == "--shard" ||
+        name == "--round" || name == "--floor" || name == "--resume")
+      continue;
+    if (value.find('\n') != std::string::npos) throw UsageError(name + " holds a line break");
+    canonical += name + "=" + value + "\n";
+  }
+  ShardBake shardOut;
+  if (args.has("--shard")) {
+    if (merge) throw UsageError("--shard is not an option of merge");
+    const std::string spec = args.str("--shard");
+    const size_t slash = spec.find('/');
+    const double i = slash == std::string::npos ? -1 : parseNumber(spec.substr(0, slash), "--shard I");
+    const double n = slash == std::string::npos ? -1 : parseNumber(spec.substr(slash + 1), "--shard N");
+    if (!(n >= 1 && n <= 65536 && i >= 0 && i < n && i == std::floor(i) && n == std::floor(n)))
+      throw UsageError("--shard must be I/N with integers 0 <= I < N <= 65536, not '" + spec + "'");
+    if (!(opt.bake.targetRelError > 0.0)) throw UsageError("--shard needs adaptive sampling (--noise > 0)");
+    if (!opt.importShCsv.empty()) throw UsageError("--shard does not take --import-sh (nothing is traced)");
+    opt.shardIndex = int(i);
+    opt.shardCount = int(n);
+    opt.shardOut = &shardOut;
+  }
+  // The two-round protocol (docs/distributed.md): round 1 writes pass-1 states, `merge --floor` the floor,
+  // round 2 resumes from this shard's round-1 part with that floor.
+  ShardPart resume;
+  const std::string round = args.str("--round");
+  if (round != "both" && round != "1" && round != "2") throw UsageError("--round must be both, 1 or 2");
+  if (round != "both" && !args.has("--shard")) throw UsageError("--round needs --shard I/N");
+  if ((args.has("--floor") || args.has("--resume")) != (round == "2"))
+    throw UsageError("--round 2 takes --floor FILE and --resume FILE (and only it does)");
+  if (round == "1") opt.shardRound = 1;
+  if (round == "2") {
+    ShardPart floor = readShardPart(args.str("--floor"));
+    resume = readShardPart(args.str("--resume"));
+    if (floor.stage != PartStage::kFloor)
+      throw InputError(args.str("--floor") + " is not a floor part (tetraprobe merge --floor)");
+    if (resume.stage != PartStage::kPass1 || resume.index != uint32_t(opt.shardIndex))
+      throw InputError(args.str("--resume") + " is not shard " + std::to_string(opt.shardIndex) +
+                       "'s round-1 part");
+    checkSameBake(resume, floor, args.str("--resume"));
+    if (resume.options != canonical || resume.count != uint32_t(opt.shardCount))
+      throw InputError(args.str("--resume") + " was baked with different options or shard count");
+    resume.bake.floor = floor.bake.floor;
+    opt.shardRound = 2;
+    opt.shardPass1 = &resume.bake;
+    opt.expectedProbeCount = resume.probeCount;
+  }
+
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = loadScene(scenePath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const auto& w : scene.warnings) std::fprintf(stderr, "tetraprobe bake: warning: %s\n", w.c_str());
+  const uint64_t sceneHash = sceneContentHash(scene);
+  if (merge) {
+    if (merge->sceneHash != sceneHash)
+      throw InputError("scene " + scenePath + " differs from the one the shards baked (content hash)");
+    opt.merged = &merge->bake;
+    opt.expectedProbeCount = merge->probeCount;
+  }
+  if (opt.shardRound == 2 && resume.sceneHash != sceneHash)
+    throw InputError("scene " + scenePath + " differs from the one round 1 baked (content hash)");
 
   PipelineStats stats;
   stats.timings.emplace_back("load", loadSeconds);
   Level level = buildLevel(scene, opt, stats);
+
+  if (opt.shardCount > 0) {
+    ShardPart part;
+    part.stage = opt.shardRound == 1 ? PartStage::kPass1 : PartStage::kPass12;
+    part.index = uint32_t(opt.shardIndex);
+    part.count = uint32_t(opt.shardCount);
+    part.probeCount = level.probes.size();
+    part.sceneHash = sceneHash;
+    part.options = canonical;
+    part.bake = std::move(shardOut);
+    const auto tw = std::chrono::steady_clock::now();
+    writeShardPart(out, part);
+    stats.timings.emplace_back("write",
+                               std::chrono::duration<double>(std::chrono::steady_clock::now() - tw).count());
+    uint64_t batches = 0;
+    for (const ProbeBakeState& st : part.bake.states) batches += uint64_t(st.batches);
+    std::printf("tetraprobe bake: shard %d/%d of %s -> %s\n  probes  %zu of %zu, %llu paths (%s)\n",
+                opt.shardIndex, opt.shardCount, scenePath.c_str(), out.c_str(), part.bake.probes.size(),
+                level.probes.size(), (unsigned long long)(batches * kBakeBatchSize),
+                opt.shardRound == 1 ? "pass 1" : "passes 1-2");
+    std::printf("  time   ");
+    double total = 0.0;
+    for (const auto& [stage, sec] : stats.timings) {
+      std::printf(" %s %.2fs", stage.c_str(), sec);
+      total += sec;
+    }
+    std::printf("  (total %.2fs)\n", total);
+    return 0;
+  }
 
   const auto tw = std::chrono::steady_clock::now();
   if (const LevelResult r = saveLevel(out, level); !r) throw std::runtime_error(r.message);
@@ -374,6 +475,10 @@ int cmdBake(int argc, char** argv) {
     writeJsonReport(args.str("--report"), j);
   }
   return 0;
+}
+
+int cmdBake(int argc, char** argv) {
+  return runBake(argc, argv, nullptr);
 }
 
 }  // namespace tetraprobe::cli

@@ -19,6 +19,9 @@ struct Command {
 
 constexpr Command kCommands[] = {
     {"bake", tetraprobe::cli::cmdBake, "place probes, path-trace their SH, tetrahedralize, write LEVEL.tpb"},
+    {"merge", tetraprobe::cli::cmdMerge,
+     "join the part files of a sharded bake (bake --shard I/N) into LEVEL.tpb"},
+    {"stream", tetraprobe::cli::cmdStream, "add a streaming index (sectors + coarse probe set) to a level"},
     {"inspect", tetraprobe::cli::cmdInspect, "print what a level file holds"},
     {"query", tetraprobe::cli::cmdQuery, "irradiance at points, from the level file (CPU runtime)"},
     {"render", tetraprobe::cli::cmdRender, "render a view lit per pixel by the probes (Vulkan, headless)"},

@@ -234,6 +234,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
   level.tets = buildTetRecords(probes, mesh, level.origin);
   level.outerCells = buildOuterCells(level.probes, level.tets);  // continuous answers outside the hull
   level.cellGrid = buildCellGrid(level.probes, level.tets);      // point location: 16 m cells, a BSP each
+  if ((options.shardCount > 0 || options.merged) && !options.importShCsv.empty())
+    throw InputError("a sharded bake traces probes: it does not take --import-sh");
   if (!options.importShCsv.empty()) {
     level.sh = std::move(imported.sh);
     truncateShOrder(level.sh, options.bake.shOrder);
@@ -248,7 +250,22 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
           pts, std::vector<double>(pts.size(), options.spacing));
       for (size_t k = 0; k < shell.size(); ++k) skip[shell[k]] = shellClearance[k].inside ? 1 : 0;
     }
-    level.sh = bakeProbes(tracer, probes, options.bake, &stats.bake, &skip);
+    if ((options.merged || options.shardRound == 2) && options.expectedProbeCount != probes.size())
+      throw InputError("the shards placed " + std::to_string(options.expectedProbeCount) +
+                       " probes, this placement " + std::to_string(probes.size()));
+    if (options.shardCount > 0) {
+      const std::vector<uint8_t> own = shardOwnership(probes, options.shardIndex, options.shardCount);
+      *options.shardOut =
+          options.shardRound == 1 ? bakeProbesShardPass1(tracer, probes, options.bake, own, &skip)
+          : options.shardRound == 2
+              ? bakeProbesShardPass2(tracer, probes, options.bake, own, *options.shardPass1, &skip)
+              : bakeProbesShard(tracer, probes, options.bake, own, &skip);
+      timer.mark("bake (shard)");
+      return level;
+    }
+    level.sh = options.merged
+                   ? bakeProbesMerged(tracer, probes, options.bake, *options.merged, &stats.bake, &skip)
+                   : bakeProbes(tracer, probes, options.bake, &stats.bake, &skip);
     timer.mark("bake");
   }
   if (!shell.empty() && options.importShCsv.empty()) {

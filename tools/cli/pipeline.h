@@ -47,6 +47,18 @@ struct PipelineOptions {
   // How far in front of its surface point a refinement probe sits at most, metres; <= 0: spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;
+
+  // Sharded bake (docs/distributed.md; bake.h, bakeProbesShard). shardCount > 0: buildLevel places the
+  // probes, runs bake passes 1-2 for shard shardIndex's probes (shardOwnership), stores their states in
+  // *shardOut and returns the level as it stands then (probes and tets, no SH). `merged`: every probe's
+  // state from the shards replaces passes 1-2 (bakeProbesMerged); the level equals the one-process bake's.
+  // shardRound 1: pass 1 of the shard's probes only (bakeProbesShardPass1); 2: passes 2 from `shardPass1`
+  // (that shard's round-1 states and the floor, bakeProbesShardPass2); 0: both in one (bakeProbesShard).
+  int shardIndex = 0, shardCount = 0, shardRound = 0;
+  ShardBake* shardOut = nullptr;
+  const ShardBake* shardPass1 = nullptr;
+  const ShardBake* merged = nullptr;
+  uint64_t expectedProbeCount = 0;  // with `merged` or round 2: the probe count the shards placed (checked)
 };
 
 struct PipelineStats {

@@ -90,6 +90,68 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
                               const BakeOptions& options, BakeStats* stats = nullptr,
                               const std::vector<uint8_t>* skip = nullptr);
 
+// ---- Sharded bake (bake/src/bake_probes.cpp; protocol in docs/distributed.md) ----
+//
+// bakeProbes with adaptive sampling is three passes: (1) every probe's first samplesPerProbe paths, then the
+// floor (kBakeErrorFloor x the median pass-1 mean over all probes); (2) each probe alone to its target; (3)
+// the path budget shared among the probes still above it. A probe's batches draw from streams keyed by (seed,
+// probe index, batch), so its state after pass 2 depends only on the options, its position, its index and
+// the floor, never on which process traced it. A shard runs pass 1 for every probe (the floor needs all of
+// them) and pass 2 for its own; the merge takes every probe's state and runs pass 3 and the projection:
+// bakeProbesMerged(shards' states) is bit-identical to bakeProbes with the same arguments.
+
+// One probe's adaptive accumulator after pass 2 (the sums bakeProbes keeps, in double).
+struct ProbeBakeState {
+  double acc[kShCoeffCount][3] = {};  // sum over batches of the batch SH (W/(m^2 sr))
+  int32_t batches = 0;                // batches of kBakeBatchSize paths taken
+  double mean[6] = {}, m2[6] = {};    // Welford over batches of the luminance of E at the six axis normals
+  double achieved = -1.0;             // relative standard error reached against the floor
+  uint64_t intersectRays = 0, occludedRays = 0;  // rays this probe's passes 1-2 traced (BakeStats)
+};
+
+struct ShardBake {
+  double floor = 0.0;                  // kBakeErrorFloor x the level's median pass-1 mean (all probes)
+  std::vector<uint32_t> probes;        // probe indices, increasing within one shard
+  std::vector<ProbeBakeState> states;  // one per entry of `probes`
+};
+
+// The probes of shard `index` of `count`: the probes sorted by (x, y, z, index) cut into `count` slabs of
+// equal counts (within one), slab `index` marked 1. Deterministic; every probe in exactly one shard.
+// std::invalid_argument unless 0 <= index < count.
+std::vector<uint8_t> shardOwnership(const std::vector<glm::dvec3>& probes, int index, int count);
+
+// A shard: pass 1 for every probe that is not skipped, pass 2 for those with own[i] != 0; returns their
+// states (and the floor). Needs options.targetRelError > 0 (InputError otherwise), else as bakeProbes.
+// Cost: pass 1 of every probe (replicated in every shard) plus pass 2 of its own.
+ShardBake bakeProbesShard(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                          const BakeOptions& options, const std::vector<uint8_t>& own,
+                          const std::vector<uint8_t>* skip = nullptr);
+
+// The same in two rounds, so no shard traces another's pass 1 (docs/distributed.md): round 1 traces pass 1
+// of the own probes only and returns their states (floor NaN); the floor is bakeErrorFloor over
+// probeBakeMean of every shard's round-1 states; round 2 takes the shard's round-1 states (pass1.probes:
+// exactly its own traced probes) and that floor (pass1.floor) and returns what bakeProbesShard would.
+// InputError when pass1 holds another set of probes or a state not fresh from pass 1.
+ShardBake bakeProbesShardPass1(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                               const BakeOptions& options, const std::vector<uint8_t>& own,
+                               const std::vector<uint8_t>* skip = nullptr);
+ShardBake bakeProbesShardPass2(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                               const BakeOptions& options, const std::vector<uint8_t>& own,
+                               const ShardBake& pass1, const std::vector<uint8_t>* skip = nullptr);
+// |mean luminance of E over the six axis normals| of a probe's state: what the floor's median is over.
+double probeBakeMean(const ProbeBakeState& state);
+// kBakeErrorFloor x the median (the element of rank size / 2) of `means`; 0 for none. bakeProbes's floor is
+// this over every traced probe's pass-1 mean.
+double bakeErrorFloor(std::vector<double> means);
+
+// The merge: `merged` holds exactly one state for every probe that is not skipped (the shards' outputs
+// concatenated, any order) and the shards' floor; runs pass 3 and the SH projection. The result and `stats`
+// (but its seconds) equal bakeProbes(tracer, probes, options, stats, skip). InputError when a probe's state is
+// missing, repeated, out of range, for a skipped probe, or outside the batch limits the options give.
+std::vector<ShRgb> bakeProbesMerged(const SceneTracer& tracer, const std::vector<glm::dvec3>& probes,
+                                    const BakeOptions& options, const ShardBake& merged,
+                                    BakeStats* stats = nullptr, const std::vector<uint8_t>* skip = nullptr);
+
 // Sets coefficients 4..8 to exactly zero (an L1 probe, runtime/sh.h) when order == 1; no-op for order 2.
 void truncateShOrder(std::vector<ShRgb>& sh, int order);
 

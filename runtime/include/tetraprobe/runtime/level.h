@@ -109,6 +109,9 @@ struct Level {
   // Optional: empty = not recorded (levels written before the KIND section); else one per probe.
   std::vector<LevelProbeKind> probeKinds;
   std::string generator;  // free text: tool version and options that produced the file
+  // Optional: the streaming index (section STRM: sectors of cells and a coarse probe set, streaming.h),
+  // bytes as stored; empty = none. loadLevel and saveLevel carry it unparsed; StreamingLevel reads it.
+  std::vector<uint8_t> stream;
 };
 
 enum class LevelStatus {
