@@ -65,19 +65,13 @@ int benchRender(int argc, char** argv) {
       "the level's SH blended at each node, read from seven 3D textures with hardware trilinear filtering).\n"
       "Each time is the median over --frames frames after 2 warm-up frames of Vulkan timestamps around\n"
       "the pass. The goal on lavapipe: the level's lookup_ms <= 1.5 x grid_ms.",
-      {{"--size", "", "WxH", "image size in pixels", "1280x720"},
-       {"--camera", "", "NAME", "a camera named in the scene (default: the scene's first, else automatic)",
-        ""},
-       {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
-       {"--target", "", "X,Y,Z", "point the camera looks at", ""},
-       {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
-       {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
-       {"--frames", "", "N", "timed frames (median), after 2 warm-up frames", "9"},
-       {"--also", "", "V1,V2",
-        "more variants to time, named as printed (e.g. l2+outer+cells), even ones that "
-        "leave out what the level uses (their pixels are then wrong): to profile the lookup",
-        ""},
-       {"--json", "", "", "print the figures as one JSON object", ""}});
+      withViewOptions({{"--size", "", "WxH", "image size in pixels", "1280x720"},
+                       {"--frames", "", "N", "timed frames (median), after 2 warm-up frames", "9"},
+                       {"--also", "", "V1,V2",
+                        "more variants to time, named as printed (e.g. l2+outer+cells), even ones that "
+                        "leave out what the level uses (their pixels are then wrong): to profile the lookup",
+                        ""},
+                       {"--json", "", "", "print the figures as one JSON object", ""}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   RenderView view;

@@ -182,25 +182,23 @@ int cmdRender(int argc, char** argv) {
       "With .exr: reference = linear E, error = e (the same in r, g, b).\n"
       "--json FILE with a GPU mode: GPU milliseconds per pass from Vulkan timestamp queries, the median\n"
       "of --frames frames after 2 warm-up frames.",
-      {{"--output", "-o", "IMAGE", "image to write (.png or .exr)", ""},
-       {"--camera", "", "NAME", "a camera named in the scene (default: the scene's first, else automatic)",
-        ""},
-       {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
-       {"--target", "", "X,Y,Z", "point the camera looks at", ""},
-       {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
-       {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"},
-       {"--size", "", "WxH", "image size in pixels", "960x540"},
-       {"--mode", "", "irradiance|indirect|full|probes|tets|occlusion|reference|error",
-        "what the pixels show", "indirect"},
-       {"--exposure", "", "auto|X", "PNG exposure multiplier before tone mapping (not for error)", "auto"},
-       {"--samples", "", "N", "reference/error: paths per pixel", "64"},
-       {"--max-seconds", "", "S", "reference/error: stop after the pass that ends past S s (0 = none)", "0"},
-       {"--bounces", "", "unbounded|N", "reference/error: path depth", "unbounded"},
-       {"--seed", "", "N", "reference/error: random seed (same seed and passes: same image)", "1"},
-       {"--threads", "", "N", "reference/error: worker threads, 0 = all cores (never changes it)", "0"},
-       {"--json", "", "FILE", "write the figures printed as JSON (GPU modes: per-pass GPU times)", ""},
-       {"--frames", "", "N", "GPU modes: timed frames (median; with --json 2 warm-up frames before)", "9"},
-       {"--shadow-map-size", "", "N", "full: texels per side of each shadow-map layer", "1024"}});
+      withViewOptions(
+          {{"--output", "-o", "IMAGE", "image to write (.png or .exr)", ""},
+           {"--size", "", "WxH", "image size in pixels", "960x540"},
+           {"--mode", "", "irradiance|indirect|full|probes|tets|occlusion|reference|error",
+            "what the pixels show", "indirect"},
+           {"--exposure", "", "auto|X", "PNG exposure multiplier before tone mapping (not for error)",
+            "auto"},
+           {"--samples", "", "N", "reference/error: paths per pixel", "64"},
+           {"--max-seconds", "", "S", "reference/error: stop after the pass that ends past S s (0 = none)",
+            "0"},
+           {"--bounces", "", "unbounded|N", "reference/error: path depth", "unbounded"},
+           {"--seed", "", "N", "reference/error: random seed (same seed and passes: same image)", "1"},
+           {"--threads", "", "N", "reference/error: worker threads, 0 = all cores (never changes it)", "0"},
+           {"--json", "", "FILE", "write the figures printed as JSON (GPU modes: per-pass GPU times)", ""},
+           {"--frames", "", "N", "GPU modes: timed frames (median; with --json 2 warm-up frames before)",
+            "9"},
+           {"--shadow-map-size", "", "N", "full: texels per side of each shadow-map layer", "1024"}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   if (!args.has("--output")) throw UsageError("missing -o IMAGE");

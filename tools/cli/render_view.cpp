@@ -41,6 +41,16 @@ std::vector<RenderLight> toRenderLights(const Scene& scene) {
   return lights;
 }
 
+std::vector<OptionSpec> withViewOptions(std::vector<OptionSpec> own) {
+  own.insert(own.end(), {{"--camera", "", "NAME",
+                          "a camera named in the scene (default: the scene's first, else automatic)", ""},
+                         {"--eye", "", "X,Y,Z", "camera position (with --target)", ""},
+                         {"--target", "", "X,Y,Z", "point the camera looks at", ""},
+                         {"--up", "", "X,Y,Z", "camera up vector", "0,1,0"},
+                         {"--fov", "", "DEG", "vertical field of view (with --eye)", "60"}});
+  return own;
+}
+
 void chooseView(const Args& args, const Scene& scene, RenderView& view) {
   if (args.has("--eye") || args.has("--target")) {
     if (!args.has("--eye") || !args.has("--target")) throw UsageError("--eye and --target go together");

@@ -14,6 +14,8 @@ namespace tetraprobe::cli {
 RenderMesh toRenderMesh(const Scene& scene);
 // The scene's point, spot and sun lights.
 std::vector<RenderLight> toRenderLights(const Scene& scene);
+// A command's own options followed by those chooseView reads: --camera, --eye, --target, --up, --fov.
+std::vector<OptionSpec> withViewOptions(std::vector<OptionSpec> own);
 // Sets view.eye, target, up and fovYDeg from the options (which `args` must declare: --camera, --eye,
 // --target, --up, --fov); throws UsageError / InputError naming a bad combination or an unknown camera.
 void chooseView(const Args& args, const Scene& scene, RenderView& view);
