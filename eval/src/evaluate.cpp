@@ -31,6 +31,35 @@ double luminance(const glm::vec3& c) {
   return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
 }
 
+// The report's header and its points' surfaces, drawn as options.sampling says (both reference paths draw
+// the same points for the same options).
+EvalReport drawPoints(const SceneTracer& tracer, const EvalOptions& options,
+                      std::vector<SurfacePoint>& surface) {
+  if (options.sampling == EvalSampling::kCameras && options.cameras.empty())
+    throw InputError("eval: camera sampling needs at least one camera (the scene names none)");
+  EvalReport report;
+  report.sampling = options.sampling;
+  report.samplesPerPoint = options.samplesPerPoint;
+  report.referenceBounces = options.referenceBounces;
+  surface = options.sampling == EvalSampling::kCameras
+                ? sampleCameraPoints(tracer, options.cameras, options.points, options.seed)
+                : sampleSurfacePoints(tracer, options.points, options.seed);
+  report.points.resize(surface.size());
+  return report;
+}
+
+// Each point's indirectOnly, and indirectOnlyPoints and meanRelStderr, from the points' references.
+void summarizeReferences(EvalReport& report) {
+  double sum = 0.0;
+  for (auto& p : report.points) {
+    p.indirectOnly = luminance(p.direct) < kIndirectOnlyFraction * luminance(p.reference.irradiance);
+    report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
+    sum += luminance(p.reference.stderror) /
+           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
+  }
+  report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
+}
+
 }  // namespace
 
 const char* evalSamplingName(EvalSampling sampling) {
@@ -38,18 +67,9 @@ const char* evalSamplingName(EvalSampling sampling) {
 }
 
 EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const EvalOptions& options) {
-  if (options.sampling == EvalSampling::kCameras && options.cameras.empty())
-    throw InputError("eval: camera sampling needs at least one camera (the scene names none)");
-  EvalReport report;
-  report.sampling = options.sampling;
-  report.samplesPerPoint = options.samplesPerPoint;
-  report.referenceBounces = options.referenceBounces;
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<SurfacePoint> surface =
-      options.sampling == EvalSampling::kCameras
-          ? sampleCameraPoints(tracer, options.cameras, options.points, options.seed)
-          : sampleSurfacePoints(tracer, options.points, options.seed);
-  report.points.resize(surface.size());
+  std::vector<SurfacePoint> surface;
+  EvalReport report = drawPoints(tracer, options, surface);
   BakeOptions bake;
   bake.bounces = options.referenceBounces;
   bake.content = content;
@@ -69,39 +89,23 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
                             std::max(1, options.samplesPerPoint / 4),
                             splitmix64(options.seed ^ splitmix64(i) ^ 0xd1ec7ull), direct)
             .irradiance;
-    report.points[i].indirectOnly = luminance(report.points[i].direct) <
-                                    kIndirectOnlyFraction * luminance(report.points[i].reference.irradiance);
     if (options.progress) progress.advance();
   });
   progress.finish();
-  for (const auto& p : report.points) report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
-  double sum = 0.0;
-  for (const auto& p : report.points)
-    sum += luminance(p.reference.stderror) /
-           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
-  report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
+  summarizeReferences(report);
   report.referenceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
 
 EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
                           const std::vector<StoredReference>& stored) {
-  if (options.sampling == EvalSampling::kCameras && options.cameras.empty())
-    throw InputError("eval: camera sampling needs at least one camera (the scene names none)");
-  EvalReport report;
-  report.sampling = options.sampling;
-  report.samplesPerPoint = options.samplesPerPoint;
-  report.referenceBounces = options.referenceBounces;
-  const std::vector<SurfacePoint> surface =
-      options.sampling == EvalSampling::kCameras
-          ? sampleCameraPoints(tracer, options.cameras, options.points, options.seed)
-          : sampleSurfacePoints(tracer, options.points, options.seed);
+  std::vector<SurfacePoint> surface;
+  EvalReport report = drawPoints(tracer, options, surface);
   const std::string set = evalSamplingName(options.sampling);
   if (surface.size() != stored.size())
     throw InputError("eval: the stored references hold " + std::to_string(stored.size()) + " " + set +
                      " points, the sampling draws " + std::to_string(surface.size()) +
                      " (another scene, --points or --seed?)");
-  report.points.resize(surface.size());
   for (size_t i = 0; i < surface.size(); ++i) {
     const StoredReference& s = stored[i];
     const double tol = 1e-4 + 1e-6 * glm::length(surface[i].position);
@@ -115,14 +119,8 @@ EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
     p.reference.stderror = s.stderror;
     p.reference.samples = options.samplesPerPoint;
     p.direct = s.direct;
-    p.indirectOnly = luminance(p.direct) < kIndirectOnlyFraction * luminance(p.reference.irradiance);
-    report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
   }
-  double sum = 0.0;
-  for (const auto& p : report.points)
-    sum += luminance(p.reference.stderror) /
-           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
-  report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
+  summarizeReferences(report);
   return report;
 }
 
