@@ -56,6 +56,7 @@ struct Candidate {
   std::array<uint8_t, kShadowMapBlockBytes> texels{};
   uint64_t agreeing = 0, leaking = 0;
   uint64_t surfaceAgreeing = 0;  // of the answers for surface samples
+  uint64_t blackouts = 0;        // samples the data sends to the fallback though rays see a weighted probe
 };
 
 struct TetResult {
@@ -185,7 +186,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
 }
 
 void score(Candidate& c, const std::vector<Sample>& samples, const BaryFrame& bary) {
-  c.agreeing = c.leaking = c.surfaceAgreeing = 0;
+  c.agreeing = c.leaking = c.surfaceAgreeing = c.blackouts = 0;
   const OcclusionPlane* planes = c.planes.data();
   const uint8_t* texels = c.texels.data();
   for (const Sample& s : samples) {
@@ -197,6 +198,13 @@ void score(Candidate& c, const std::vector<Sample>& samples, const BaryFrame& ba
         ++c.surfaceAgreeing;
       if (stored && !truth) ++c.leaking;
     }
+    // The run time's own test (applyOcclusion): the data's answer falls back where the rays' would not.
+    float storedFallback = 0.0f, truthFallback = 0.0f;
+    applyOcclusion(s.weights, vis, &storedFallback);
+    const glm::vec4 truthVis(float(s.visible & 1u), float(s.visible >> 1 & 1u), float(s.visible >> 2 & 1u),
+                             float(s.visible >> 3 & 1u));
+    applyOcclusion(s.weights, truthVis, &truthFallback);
+    if (storedFallback > 0.0f && !(truthFallback > 0.0f)) ++c.blackouts;
   }
 }
 
@@ -453,6 +461,7 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
       st.answers += r.answers;
       st.agreeing += r.chosen.agreeing;
       st.leaking += r.chosen.leaking;
+      st.blackouts += r.chosen.blackouts;
       st.surfaceAnswers += r.surfaceAnswers;
       st.surfaceAgreeing += r.chosen.surfaceAgreeing;
       if (double(r.chosen.agreeing) < options.minAgreement * double(r.answers)) ++st.belowMinAgreement;

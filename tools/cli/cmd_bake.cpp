@@ -340,11 +340,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (opt.occlusion.mode != OcclusionMode::kNone)
     std::printf(
         "  occl    %s: %zu tets with geometry; %zu none, %zu planes, %zu shadow maps; %zu bytes (%.2f per "
-        "tet); agreement %.4f\n",
+        "tet); agreement %.4f, %llu blackouts\n",
         occlusionModeName(opt.occlusion.mode), stats.occlusion.tetsWithGeometry, stats.occlusion.none,
         stats.occlusion.planeTets, stats.occlusion.shadowMapTets, level.occlusion.bytes(),
         level.tets.empty() ? 0.0 : double(level.occlusion.bytes()) / double(level.tets.size()),
-        stats.occlusion.agreement);
+        stats.occlusion.agreement, (unsigned long long)stats.occlusion.blackouts);
   else
     std::printf("  occl    none\n");
   if (stats.refineBefore.points > 0)
@@ -447,7 +447,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                       {"shadow_maps", stats.occlusion.shadowMapTets},
                       {"tets_with_geometry", stats.occlusion.tetsWithGeometry},
                       {"bytes", level.occlusion.bytes()},
-                      {"agreement", stats.occlusion.agreement}};
+                      {"agreement", stats.occlusion.agreement},
+                      {"blackouts", stats.occlusion.blackouts}};
     nlohmann::json rounds = nlohmann::json::array();
     for (const auto& r : stats.holeRounds)
       rounds.push_back({{"points_checked", r.checked}, {"hole_points", r.holes}, {"probes_added", r.added}});

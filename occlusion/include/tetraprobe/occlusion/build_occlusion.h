@@ -59,6 +59,7 @@ struct OcclusionStats {
   uint64_t answers = 0;          // sampled (point, probe) visibility answers checked, over tets with geometry
   uint64_t agreeing = 0;         // of those, answered like the rays by the stored data (visibility > 0.5)
   uint64_t leaking = 0;          // of those, rays say occluded but the stored data says visible
+  uint64_t blackouts = 0;        // samples that see a probe by rays but are sent to the fallback by the data
   uint64_t rays = 0;             // rays traced
   uint64_t surfaceAnswers = 0;   // the part of `answers` asked at points on the geometry (normal-biased)
   uint64_t surfaceAgreeing = 0;  // of those, answered like the rays
