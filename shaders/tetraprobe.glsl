@@ -640,7 +640,7 @@ void tetraprobeBlendSh3(int t, vec4 w, vec4 p, vec4 u, out vec3 cw[9], out vec3 
 
 // --- occlusion: mirrors runtime/src/occlusion.cpp (evaluateTetOcclusion, biasWeights, applyOcclusion) ---
 const float TETRAPROBE_OCC_BIAS = 0.03, TETRAPROBE_OCC_PLANE_HALF = 0.02, TETRAPROBE_OCC_SHADOW_HALF = 0.01,
-            TETRAPROBE_OCC_FALLBACK = 1e-2;
+            TETRAPROBE_OCC_FALLBACK = 1e-2, TETRAPROBE_OCC_FRONT_SINE = 0.02, TETRAPROBE_OCC_BEHIND = 1e-3;
 
 float tetraprobeOccSmooth(float e0, float e1, float x) {  // as the CPU's smoothStep, operation for operation
   precise float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);
@@ -779,10 +779,25 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
   return s > 0.0 ? o / s : w;
 }
 
+// probeFront (runtime/occlusion.h): per probe of tet t, 1 when it lies in front of the surface at x (rising at
+// least TETRAPROBE_OCC_FRONT_SINE above its plane), 0 on or behind it, linear between; 1 for a zero normal.
+vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
+  ivec4 v = tetraprobeTets[t].v;
+  vec4 front = vec4(1.0);
+  float nl = length(n);
+  for (int i = 0; i < 4; ++i) {
+    vec3 d = tetraprobeProbePosition(v[i]) - x;
+    float scale = TETRAPROBE_OCC_FRONT_SINE * length(d) * nl;
+    float f = dot(d, n) / scale;
+    if (scale > 0.0 && !isnan(f) && !isinf(f)) front[i] = clamp(f, 0.0, 1.0);
+  }
+  return front;
+}
+
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
-// outer cell) outside it; a point that sees none blends into min(nearest-dominated blend, unoccluded blend)
-// per channel. Mirrors
+// outer cell) outside it; a point that sees none blends into min(blend dominated by the nearest probe in
+// front of the surface, unoccluded blend) per channel. Mirrors
 // ProbeQuery::irradiance and occludedIrradiance (runtime/occlusion.h).
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
@@ -800,7 +815,8 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   // the probes' SH as the occluded one (a GPU may run both sides of the branch below).
   float unused;
   vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
-  vec4 p = u * u;
+  vec4 q = u * max(tetraprobeProbeFront(loc.tet, localPos, normal), vec4(TETRAPROBE_OCC_BEHIND));
+  vec4 p = q * q;
   p = p * p;
   p = p * p;
   float ps = p.x + p.y + p.z + p.w;

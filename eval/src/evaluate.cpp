@@ -392,8 +392,11 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
             const glm::vec3 local(p - lv->origin);
             const ShRgb* probes[4] = {&lv->sh[size_t(t.v[0])], &lv->sh[size_t(t.v[1])],
                                       &lv->sh[size_t(t.v[2])], &lv->sh[size_t(t.v[3])]};
+            glm::vec3 toProbe[4];
+            for (int i = 0; i < 4; ++i) toProbe[i] = lv->probes[size_t(t.v[i])] - local;
             return occludedIrradiance(probes, loc.weights,
-                                      occlusionVisibility(*lv, *occlusion, loc.tet, local, n), n);
+                                      occlusionVisibility(*lv, *occlusion, loc.tet, local, n), n,
+                                      probeFront(toProbe, n));
           }};
 }
 

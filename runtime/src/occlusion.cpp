@@ -209,17 +209,29 @@ glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility, 
   return s > 0.0f ? o / s : w;
 }
 
+glm::vec4 probeFront(const glm::vec3 toProbe[4], const glm::vec3& normal) {
+  glm::vec4 front(1.0f);
+  const float nl = glm::length(normal);
+  for (int i = 0; i < 4; ++i) {
+    const float scale = kOcclusionFrontSine * glm::length(toProbe[i]) * nl;
+    const float f = glm::dot(toProbe[i], normal) / scale;
+    if (scale > 0.0f && std::isfinite(f)) front[i] = std::clamp(f, 0.0f, 1.0f);
+  }
+  return front;
+}
+
 glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weights,
-                             const glm::vec4& visibility, const glm::vec3& normal) {
+                             const glm::vec4& visibility, const glm::vec3& normal, const glm::vec4& front) {
   float f = 0.0f;
   const glm::vec4 w = applyOcclusion(weights, visibility, &f);
   float wf[4] = {w.x, w.y, w.z, w.w};
   const glm::vec3 visible = shIrradiance(shBlend(probes, wf, 4), normal);
   if (!(f > 0.0f)) return visible;
   // The unoccluded weights u, and their 8th powers renormalized: a blend dominated by the nearest probe
-  // (the largest weight), continuous where two weights tie.
+  // (the largest weight) in front of the surface, continuous where two weights tie.
   const glm::vec4 u = applyOcclusion(weights, glm::vec4(1.0f));
-  glm::vec4 p = u * u;
+  const glm::vec4 q = u * glm::max(front, glm::vec4(kOcclusionBehindShare));
+  glm::vec4 p = q * q;
   p = p * p;
   p = p * p;
   const float ps = p.x + p.y + p.z + p.w;

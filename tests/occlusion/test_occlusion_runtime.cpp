@@ -187,11 +187,11 @@ TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheNearestProbeCappedByTheBl
   auto blendOf = [&](const glm::vec4& w) { return w.x * e(0) + w.y * e(1) + w.z * e(2) + w.w * e(3); };
   const glm::vec4 w(0.1f, 0.2f, 0.3f, 0.4f);
   // Two visible: their renormalized blend.
-  const glm::vec3 two = occludedIrradiance(probes, w, glm::vec4(1, 0, 1, 0), n);
+  const glm::vec3 two = occludedIrradiance(probes, w, glm::vec4(1, 0, 1, 0), n, glm::vec4(1.0f));
   const glm::vec3 expectTwo = 0.25f * e(0) + 0.75f * e(2);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(two[c], expectTwo[c], 1e-5f * expectTwo[c]);
   // None visible: min(nearest-dominated blend, unoccluded blend), per channel.
-  const glm::vec3 none = occludedIrradiance(probes, w, glm::vec4(0.0f), n);
+  const glm::vec3 none = occludedIrradiance(probes, w, glm::vec4(0.0f), n, glm::vec4(1.0f));
   glm::vec4 p = w * w * w * w;
   p = p * p;
   p /= p.x + p.y + p.z + p.w;
@@ -202,11 +202,12 @@ TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheNearestProbeCappedByTheBl
   EXPECT_GT(none.y, 2.0f * dimmest.y) << "not the dimmest probe";
   EXPECT_LE(none.x, blendOf(w).x * (1.0f + 1e-6f)) << "never above the unoccluded blend";
   // Continuous where the two largest weights tie (probe 2 overtakes probe 3): no jump in the fallback.
-  glm::vec3 prevTie = occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f, 0.35f), glm::vec4(0.0f), n);
+  glm::vec3 prevTie =
+      occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f, 0.35f), glm::vec4(0.0f), n, glm::vec4(1.0f));
   for (int k = 1; k <= 200; ++k) {
     const float t = 0.1f * float(k) / 200.0f;
-    const glm::vec3 cur =
-        occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f - t, 0.35f + t), glm::vec4(0.0f), n);
+    const glm::vec3 cur = occludedIrradiance(probes, glm::vec4(0.1f, 0.1f, 0.45f - t, 0.35f + t),
+                                             glm::vec4(0.0f), n, glm::vec4(1.0f));
     for (int c = 0; c < 3; ++c) ASSERT_LE(std::abs(cur[c] - prevTie[c]), 0.02f * e(3)[c]) << k;
     prevTie = cur;
   }
@@ -214,11 +215,61 @@ TEST(OcclusionRuntime, OccludedIrradianceFallsBackToTheNearestProbeCappedByTheBl
   glm::vec3 prev = none;
   for (int k = 1; k <= 400; ++k) {
     const float v = 2.0f * kOcclusionFallbackSum * float(k) / 400.0f / w.x;  // probe 0 alone, fading in
-    const glm::vec3 cur = occludedIrradiance(probes, w, glm::vec4(v, 0, 0, 0), n);
+    const glm::vec3 cur = occludedIrradiance(probes, w, glm::vec4(v, 0, 0, 0), n, glm::vec4(1.0f));
     for (int c = 0; c < 3; ++c) ASSERT_LE(std::abs(cur[c] - prev[c]), 0.02f * e(3)[c]) << k;
     prev = cur;
   }
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(prev[c], e(0)[c], 1e-5f * e(0)[c]);
+}
+
+// probeFront: 1 for probes rising kOcclusionFrontSine or more above the surface plane, 0 on or behind it,
+// linear (so continuous) between, whatever the lengths; 1 for a zero normal (volumes) or a probe at the point.
+TEST(OcclusionRuntime, ProbeFrontIsOneInFrontZeroBehindAndContinuous) {
+  const glm::vec3 n(0.0f, 0.0f, 2.0f);  // any length
+  const glm::vec3 d[4] = {{1, 0, 0.5f}, {3, 0, -0.1f}, {100, 0, 0}, {0, 0, 0}};
+  const glm::vec4 f = probeFront(d, n);
+  EXPECT_EQ(f, glm::vec4(1.0f, 0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(probeFront(d, glm::vec3(0.0f)), glm::vec4(1.0f));
+  float prev = 0.0f;
+  for (int k = 0; k <= 400; ++k) {  // the elevation's sine from -0.01 to 0.03: one linear ramp
+    const float sine = -0.01f + 0.04f * float(k) / 400.0f;
+    const glm::vec3 e[4] = {{std::sqrt(1.0f - sine * sine), 0.0f, sine}, d[1], d[2], d[3]};
+    const float cur = probeFront(e, n).x;
+    EXPECT_NEAR(cur, std::clamp(sine / kOcclusionFrontSine, 0.0f, 1.0f), 1e-5f) << k;
+    if (k > 0) {
+      ASSERT_LE(std::abs(cur - prev), 0.0001f / kOcclusionFrontSine + 1e-5f) << k;
+    }
+    prev = cur;
+  }
+}
+
+// A point on a wall whose data hides all four probes: the nearest probe sits behind the wall (dark), two others
+// in front (lit). The fallback takes the nearest probe in front of the surface, not the nearest of all, and
+// where none is in front it is the nearest of all again (the rule before).
+TEST(OcclusionRuntime, OccludedIrradianceFallbackTakesTheNearestProbeInFrontOfTheSurface) {
+  ShRgb sh[4];
+  const float dc[4] = {0.01f, 3.0f, 2.0f, 0.02f};  // 0 and 3 behind the wall, 1 and 2 in front
+  for (int i = 0; i < 4; ++i) sh[i].c[0] = glm::vec3(dc[i]);
+  const ShRgb* probes[4] = {&sh[0], &sh[1], &sh[2], &sh[3]};
+  const glm::vec3 n(0.0f, 0.0f, 1.0f);
+  auto e = [&](int i) {
+    const ShRgb* one[1] = {probes[i]};
+    const float unit[1] = {1.0f};
+    return shIrradiance(shBlend(one, unit, 1), n).x;
+  };
+  const glm::vec4 w(0.47f, 0.24f, 0.28f, 0.01f);  // the conference room's spot (docs/accuracy.md)
+  const glm::vec3 toProbe[4] = {
+      {0.4f, -0.55f, -0.53f}, {0.08f, 1.22f, 0.53f}, {-0.7f, -0.13f, 0.5f}, {-0.84f, 0.04f, -1.72f}};
+  const glm::vec4 front = probeFront(toProbe, n);
+  ASSERT_EQ(front, glm::vec4(0.0f, 1.0f, 1.0f, 0.0f));
+  const float fallback = occludedIrradiance(probes, w, glm::vec4(0.0f), n, front).x;
+  const float unoccluded = w.x * e(0) + w.y * e(1) + w.z * e(2) + w.w * e(3);
+  EXPECT_GT(fallback, 0.9f * std::min(e(2), unoccluded)) << "light of the side the surface faces";
+  EXPECT_LE(fallback, unoccluded * (1.0f + 1e-6f)) << "capped by the unoccluded blend";
+  const float allBehind = occludedIrradiance(probes, w, glm::vec4(0.0f), n, glm::vec4(0.0f)).x;
+  EXPECT_NEAR(allBehind, occludedIrradiance(probes, w, glm::vec4(0.0f), n, glm::vec4(1.0f)).x, 1e-6f)
+      << "no probe in front: the nearest of all";
+  EXPECT_LT(allBehind, 0.1f * fallback) << "the rule before took the probe behind the wall";
 }
 
 // No occlusion data (or a tet out of range) means every probe is visible: nothing is evaluated.

@@ -34,7 +34,7 @@ using namespace tetraprobe::test;
 //
 // With occlusion (synthetic data on every tet), the GPU mirrors evaluateTetOcclusion + applyOcclusion + the
 // normal bias operation for operation in float (`precise`), and the same 1e-4 holds with no exception (worst
-// seen 1.3e-5 on lavapipe).
+// seen 1.3e-5 on lavapipe), the all-occluded fallback's pixels included.
 void expectGpuMatchesCpu(float cellSize, bool occlusion = false) {
   Level level = makeLevel();
   if (occlusion) level.occlusion = syntheticOcclusion(level);
@@ -46,7 +46,7 @@ void expectGpuMatchesCpu(float cellSize, bool occlusion = false) {
               view.width, view.height, r.timings.totalMs, r.timings.gbufferMs, r.timings.lightingWarmupMs,
               r.timings.lightingMs);
 
-  int inside = 0, outside = 0, bad = 0, occluded = 0;
+  int inside = 0, outside = 0, bad = 0, occluded = 0, fallback = 0;
   double worst = 0.0;
   for (size_t i = 0; i < size_t(view.width) * view.height; ++i) {
     if (r.position.rgba[4 * i + 3] == 0.0f) continue;
@@ -60,6 +60,9 @@ void expectGpuMatchesCpu(float cellSize, bool occlusion = false) {
     if (occlusion && loc.outerCell < 0) {
       const glm::vec4 vis = occlusionVisibility(level, level.occlusion, loc.tet, glm::vec3(local), n);
       occluded += vis != glm::vec4(1.0f);
+      float share = 0.0f;
+      applyOcclusion(loc.weights, vis, &share);
+      fallback += share > 0.0f;
     }
     if (!loc.inside) {
       EXPECT_GE(loc.outerCell, 0) << "outside answers come from an outer cell";
@@ -78,8 +81,11 @@ void expectGpuMatchesCpu(float cellSize, bool occlusion = false) {
   std::printf("compared %d pixels inside the hull, %d outside; worst relative error %.3g\n", inside, outside,
               worst);
   if (occlusion) {
-    std::printf("occlusion: %d pixels with an occluded probe, %d beyond 1e-4\n", occluded, bad);
+    std::printf(
+        "occlusion: %d pixels with an occluded probe, %d in the all-occluded fallback, %d beyond 1e-4\n",
+        occluded, fallback, bad);
     EXPECT_GT(occluded, 1000) << "the synthetic occlusion must hide probes on plenty of pixels";
+    EXPECT_GT(fallback, 100) << "the fallback (probeFront, occludedIrradiance) must be compared too";
   }
   EXPECT_EQ(bad, 0);
   EXPECT_GT(inside, 1000) << "the scene must show plenty of geometry inside the probe hull";

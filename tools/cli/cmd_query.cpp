@@ -2,16 +2,19 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include <glm/geometric.hpp>
 
 #include "args.h"
 #include "commands.h"
+#include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh.h"
+#include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
 
@@ -38,7 +41,10 @@ const char* occlusionKindText(const Level& level, int32_t tet) {
 
 // What the answer is made of, in the runtime's own terms (ProbeQuery::shade): the tet, its probes, the
 // occlusion data's visibility and the fallback share. Printed after the r,g,b line so scripts can read line 1.
-void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n, const glm::vec3& answer) {
+// With a tracer, also what rays from the point (moved off the surface along n by the tracer's epsilon) to each
+// probe say: where the data and the rays disagree, the occlusion data is the culprit.
+void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n, const glm::vec3& answer,
+             const SceneTracer* tracer) {
   const Level& level = query.level();
   const Location loc = query.locate(world);
   if (loc.tet < 0) {
@@ -57,21 +63,32 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
                                               : glm::vec4(1.0f);
   float fallback = 0.0f;
   const glm::vec4 occluded = applyOcclusion(loc.weights, vis, &fallback);
-  std::printf("  %-8s %-36s %9s %8s %10s %9s  %s\n", "probe", "position (world, m)", "distance", "weight",
-              "visibility", "after occ", "E(n) r,g,b W/m^2");
+  // The rays column only with a tracer, so the rows read the same as before without one.
+  std::printf("  %-8s %-36s %9s %8s %10s %9s %s%s\n", "probe", "position (world, m)", "distance", "weight",
+              "visibility", "after occ", tracer ? " rays " : "", " E(n) r,g,b W/m^2");
   for (int i = 0; i < 4; ++i) {
     const int32_t p = t.v[i];
     const glm::dvec3 pw = level.origin + glm::dvec3(level.probes[size_t(p)]);
     const glm::vec3 ep = shIrradiance(level.sh[size_t(p)], n);
     char pos[64];
     std::snprintf(pos, sizeof pos, "%.3f, %.3f, %.3f", pw.x, pw.y, pw.z);
-    std::printf("  %-8d %-36s %9.3f %8.4f %10.3f %9.4f  %.4g, %.4g, %.4g\n", p, pos, glm::length(pw - world),
-                loc.weights[i], vis[i], occluded[i], ep.r, ep.g, ep.b);
+    const char* rays = "";
+    if (tracer) {
+      FlushDenormalsScope ftz;
+      const glm::vec3 origin = glm::vec3(world) + n * tracer->rayEpsilon();
+      const glm::vec3 d = glm::vec3(pw) - origin;
+      const float len = glm::length(d);
+      rays = glm::dot(d, n) < 0.0f                                              ? " back "
+             : len > 0.0f && tracer->occluded(origin, d / len, 0.0f, len, 0.0f) ? "  hit "
+                                                                                : " clear";
+    }
+    std::printf("  %-8d %-36s %9.3f %8.4f %10.3f %9.4f%s  %.4g, %.4g, %.4g\n", p, pos,
+                glm::length(pw - world), loc.weights[i], vis[i], occluded[i], rays, ep.r, ep.g, ep.b);
   }
   if (fallback > 0.0f)
     std::printf(
         "  fallback share %.3f: the data says the point sees %s of its probes; the answer blends toward the "
-        "nearest probe capped by the unoccluded blend (docs/occlusion.md)\n",
+        "nearest probe in front of the surface, capped by the unoccluded blend (docs/occlusion.md)\n",
         fallback, fallback >= 1.0f ? "none" : "little");
   std::printf("  answer %.4g, %.4g, %.4g W/m^2 (luminance %.4g)\n", answer.r, answer.g, answer.b,
               0.2126 * answer.r + 0.7152 * answer.g + 0.0722 * answer.b);
@@ -89,6 +106,10 @@ int cmdQuery(int argc, char** argv) {
        {"--explain", "", "",
         "single point: also print why (its tet, each probe's position, distance, weight, visibility from the "
         "occlusion data and irradiance, the fallback share): where a spot is too dark or too bright",
+        ""},
+       {"--scene", "", "SCENE",
+        "with --explain: also trace rays from the point to each probe in this scene (column rays: clear, hit "
+        "by an opaque surface, or back = behind the surface) to check the occlusion data",
         ""}});
   if (!args.parse(argc, argv)) return 0;
   if (args.positional().empty()) throw UsageError("missing LEVEL.tpb");
@@ -139,7 +160,15 @@ int cmdQuery(int argc, char** argv) {
   const glm::dvec3 world(v[0], v[1], v[2]);
   const glm::vec3 e = query.irradiance(world, n);
   std::printf("%.9g,%.9g,%.9g\n", e.x, e.y, e.z);
-  if (args.has("--explain")) explain(query, world, n, e);
+  if (args.has("--explain")) {
+    std::unique_ptr<Scene> scene;
+    std::unique_ptr<SceneTracer> tracer;
+    if (args.has("--scene")) {
+      scene = std::make_unique<Scene>(loadScene(args.str("--scene")));
+      tracer = std::make_unique<SceneTracer>(*scene);
+    }
+    explain(query, world, n, e, tracer.get());
+  }
   return 0;
 }
 

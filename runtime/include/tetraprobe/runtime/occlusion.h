@@ -85,17 +85,30 @@ glm::vec4 occlusionVisibility(const Level& level, const LevelOcclusion& occlusio
 // always finite, non-negative and sums to 1.
 glm::vec4 applyOcclusion(const glm::vec4& weights, const glm::vec4& visibility, float* fallback = nullptr);
 
+// Per probe, whether it lies in front of the surface at a shading point: with d_i = probe i - point,
+//   front_i = clamp(dot(d_i, n) / (kOcclusionFrontSine |d_i| |n|), 0, 1)
+// 1 once the direction to the probe rises kOcclusionFrontSine (sine of its elevation, ~1 deg) above the
+// surface plane, 0 on or behind it, linear between (continuous in the point). 1 when n or d_i is zero
+// (volumes, a probe at the point) or the result is not finite. `toProbe[i]` = d_i, any frame that n shares.
+inline constexpr float kOcclusionFrontSine = 0.02f;
+glm::vec4 probeFront(const glm::vec3 toProbe[4], const glm::vec3& normal);
+
 // Irradiance (W/m^2) a point gets from its tet's four probes after occlusion, the run-time answer:
 //   (1 - f) E(applyOcclusion(weights, visibility)) + f min(E(p), E(u))   (min per channel)
 // with f the fallback share, u the unoccluded weights (applyOcclusion with every probe visible) and
-// p = u^8 / sum u^8, a blend dominated by the nearest probe (continuous where weights tie). The stored data
-// claims the point sees none of its probes, but measured at the eval points of five levels most such points
-// see one by rays (the data is a 16-texel or 3-plane approximation), and the nearest is the best guess of
-// which: against the dimmest probe (the rule before), dark holes at the cameras fell from 1.7 % to 0.1 % on
-// Sponza, 1.8 % to 0.2 % on q3 dm4ish and 1.8 % to 0.2 % on the conference room (docs/accuracy.md). Capping
-// by the unoccluded blend keeps an enclosed point next to one bright probe from taking all of it. Continuous
-// in the weights, the visibility and the normal. `probes[i]` is tet.v[i]'s SH.
+//   p_i = q_i^8 / sum_j q_j^8,   q_i = u_i max(front_i, kOcclusionBehindShare),
+// a blend dominated by the nearest probe in front of the surface (continuous where weights tie; exactly the
+// nearest-of-all blend u^8 / sum u^8 when none is in front). The stored data claims the point sees none of its probes, but measured at
+// the eval points of five levels most such points see one by rays (the data is a 16-texel or 3-plane
+// approximation), and the nearest is the best guess of which: against the dimmest probe (the rule before),
+// dark holes at the cameras fell from 1.7 % to 0.1 % on Sponza, 1.8 % to 0.2 % on q3 dm4ish and 1.8 % to
+// 0.2 % on the conference room. A probe behind the surface plane is never what a surface sees, yet it was
+// often the nearest: the conference room's last dark holes (docs/accuracy.md) took a probe under the wall's
+// furniture 5 cm off the floor while rays saw the two in front of the wall. Capping by the unoccluded blend
+// keeps an enclosed point next to one bright probe from taking all of it. Continuous in the weights, the
+// visibility, the front factors and the normal. `probes[i]` is tet.v[i]'s SH; `front` from probeFront.
+inline constexpr float kOcclusionBehindShare = 1e-3f;
 glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weights,
-                             const glm::vec4& visibility, const glm::vec3& normal);
+                             const glm::vec4& visibility, const glm::vec3& normal, const glm::vec4& front);
 
 }  // namespace tetraprobe
