@@ -76,6 +76,10 @@ double ReferenceImage::meanRelStderr() const {
   return count ? sum / double(count) : 0.0;
 }
 
+namespace {
+constexpr int kMaxBackFaces = 64;  // back faces a primary ray steps through before the pixel counts as empty
+}  // namespace
+
 ReferenceGBuffer traceReferenceGBuffer(const SceneTracer& tracer, const RenderView& view, int threads) {
   checkViewSize(view);
   ReferenceGBuffer g;
@@ -93,13 +97,22 @@ ReferenceGBuffer traceReferenceGBuffer(const SceneTracer& tracer, const RenderVi
     for (int x = 0; x < view.width; ++x) {
       const size_t i = y * size_t(view.width) + size_t(x);
       const glm::vec3 dir(pixelRayDirection(view, x + 0.5, double(y) + 0.5));
-      const Hit hit = tracer.intersect(eye, dir, 0.0f, std::numeric_limits<float>::infinity());
-      if (!hit.hit) continue;
+      // The first front face: the Vulkan G-buffer culls back faces, so a cut-away view (a camera above a
+      // closed room, looking through the back of its ceiling) shows what lies behind them.
+      Hit hit;
+      float tnear = 0.0f;
+      for (int k = 0; k < kMaxBackFaces; ++k) {
+        hit = tracer.intersect(eye, dir, tnear, std::numeric_limits<float>::infinity());
+        if (!hit.hit || hit.frontFace) break;
+        tnear = std::max(hit.t + tracer.rayEpsilon(),
+                         std::nextafter(hit.t, std::numeric_limits<float>::infinity()));
+      }
+      if (!hit.hit || !hit.frontFace) continue;
       const glm::uvec3 tri = scene.triangles[hit.triangle];
       const glm::dvec3 a(scene.positions[tri[0]]), b(scene.positions[tri[1]]), c(scene.positions[tri[2]]);
       g.hit[i] = 1;
       g.position[i] = a * (1.0 - double(hit.u) - double(hit.v)) + b * double(hit.u) + c * double(hit.v);
-      g.normal[i] = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
+      g.normal[i] = hit.geometricNormal;
       g.triangle[i] = hit.triangle;
     }
   });

@@ -241,5 +241,46 @@ TEST(ReferenceImage, GBufferAgreesWithVulkanRenderer) {
   EXPECT_LT(double(close), 0.5 * double(both)) << "a half-pixel shift must not pass the position check";
 }
 
+// A cut-away view: the crates inside a closed room (faces pointing in), the camera outside above it. The
+// rasterizer culls the walls' and ceiling's back faces and shows the crates; the reference G-buffer steps
+// through the back faces and meets the same points (the agreement above), all front faces. Without the
+// stepping most pixels would be the room's unlit outside: the first hit of most rays is a back face here.
+TEST(ReferenceImage, GBufferStepsThroughBackFacesLikeTheRasterizer) {
+  Scene scene = cratesScene();
+  // Around the 6 m ground, clear of it (coincident surfaces would leave the rasterizer's depth test to
+  // rounding).
+  test::addBox(scene, {-3.3f, -0.05f, -3.3f}, {3.3f, 2.6f, 3.3f}, true, scene.triangleMaterial[0]);
+  const SceneTracer tracer(scene);
+  const Level level = test::bakedLevel(tracer, test::probeGrid(), 16);
+  const ProbeQuery query(level);
+  const RenderView view = cratesView();
+  size_t backFirst = 0;
+  for (int y = 0; y < view.height; ++y)
+    for (int x = 0; x < view.width; ++x) {
+      const Hit h = tracer.intersect(view.eye, glm::vec3(pixelRayDirection(view, x + 0.5, y + 0.5)), 0.0f,
+                                     std::numeric_limits<float>::infinity());
+      backFirst += h.hit && !h.frontFace;
+    }
+  ASSERT_GT(backFirst, size_t(view.width * view.height / 4)) << "the view must look through back faces";
+  RenderResult vk;
+  try {
+    vk = renderLevel(toRenderMesh(scene), level, query, view);
+  } catch (const std::runtime_error& e) {
+    if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
+    throw;
+  }
+  const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view);
+  const Agreement a = compare(vk, g, level.origin, 2e-3);
+  std::printf("%zu of %d rays meet a back face first; mask agreement %.4f, position agreement %.4f\n",
+              backFirst, view.width * view.height, a.mask, a.position);
+  EXPECT_GE(a.mask, 0.99);
+  EXPECT_GE(a.position, 0.99);
+  for (size_t i = 0; i < g.hit.size(); ++i) {
+    if (!g.hit[i]) continue;
+    const glm::dvec3 toEye = glm::dvec3(view.eye) - g.position[i];
+    ASSERT_GT(glm::dot(glm::dvec3(g.normal[i]), toEye), 0.0) << "pixel " << i << ": a back face";
+  }
+}
+
 }  // namespace
 }  // namespace tetraprobe

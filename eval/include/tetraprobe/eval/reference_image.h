@@ -22,19 +22,20 @@ namespace tetraprobe {
 
 // Path depth: kUnboundedBounces (bake/bake.h), Russian roulette only, is the unbiased reference.
 
-// What the pixel-centre primary ray of each pixel meets first (either face of a triangle; the Vulkan
-// renderer culls back faces, so where the camera sees the back of a triangle the two differ).
+// What the pixel-centre primary ray of each pixel meets first, back faces stepped through as the Vulkan
+// renderer culls them (a cut-away view shows the room behind the back of its ceiling in both).
 struct ReferenceGBuffer {
   int width = 0, height = 0;
   std::vector<uint8_t> hit;          // 1 where the ray met a triangle, 0 for background
   std::vector<glm::dvec3> position;  // world metres, on the triangle (from barycentrics); 0 for background
-  std::vector<glm::vec3> normal;     // unit geometric normal turned towards the camera; 0 for background
+  std::vector<glm::vec3> normal;     // unit geometric normal (front face: towards the camera); 0 for background
   std::vector<uint32_t> triangle;    // index into Scene::triangles; 0 for background
   size_t hitCount() const;
 };
 
 // Casts the primary ray through every pixel centre of `view` (pixelRayDirection: the renderer's camera) and
-// records the first hit in (0, infinity). view.width x view.height pixels, each in 1..16384 (else
+// records the first front-face hit in (0, infinity) (a ray stepping through more than 64 back faces counts as
+// background). view.width x view.height pixels, each in 1..16384 (else
 // InputError). Allocates the four per-pixel arrays. Parallel over rows on up to `threads` threads (0 = all
 // cores); the result does not depend on the thread count.
 ReferenceGBuffer traceReferenceGBuffer(const SceneTracer& tracer, const RenderView& view, int threads = 0);
