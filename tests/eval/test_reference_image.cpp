@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -162,6 +163,18 @@ RenderView cratesView() {
   return v;
 }
 
+// The Vulkan render of `scene` lit by `level`, or nothing (and `why`) on a machine without a Vulkan device.
+std::optional<RenderResult> vulkanRender(const Scene& scene, const Level& level, const ProbeQuery& query,
+                                         const RenderView& view, std::string& why) {
+  try {
+    return renderLevel(toRenderMesh(scene), level, query, view);
+  } catch (const std::runtime_error& e) {
+    if (std::string(e.what()).find("no Vulkan") == std::string::npos) throw;
+    why = e.what();
+    return std::nullopt;
+  }
+}
+
 // Fraction of pixels whose hit/miss agrees, and fraction of pixels hit by both whose points lie within
 // `tolerance` metres.
 struct Agreement {
@@ -201,15 +214,11 @@ TEST(ReferenceImage, GBufferAgreesWithVulkanRenderer) {
   const Level level = test::bakedLevel(tracer, probes, 64);
   const ProbeQuery query(level);
   const RenderView view = cratesView();
-  RenderResult vk;
-  try {
-    vk = renderLevel(toRenderMesh(scene), level, query, view);
-  } catch (const std::runtime_error& e) {
-    if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
-    throw;
-  }
+  std::string why;
+  const std::optional<RenderResult> vk = vulkanRender(scene, level, query, view, why);
+  if (!vk) GTEST_SKIP() << why;
   const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view);
-  const Agreement a = compare(vk, g, level.origin, 2e-3);
+  const Agreement a = compare(*vk, g, level.origin, 2e-3);
   std::printf("mask agreement %.4f, position agreement %.4f (%zu Vulkan hits, %zu reference hits of %d)\n",
               a.mask, a.position, a.hitsVulkan, a.hitsReference, view.width * view.height);
   EXPECT_GE(a.mask, 0.99);
@@ -220,7 +229,7 @@ TEST(ReferenceImage, GBufferAgreesWithVulkanRenderer) {
 
   RenderView flipped = view;
   flipped.up = -view.up;  // the image turned upside down
-  const Agreement f = compare(vk, traceReferenceGBuffer(tracer, flipped), level.origin, 2e-3);
+  const Agreement f = compare(*vk, traceReferenceGBuffer(tracer, flipped), level.origin, 2e-3);
   EXPECT_LT(f.mask, 0.99);
   EXPECT_LT(f.position, 0.5);
 
@@ -230,12 +239,13 @@ TEST(ReferenceImage, GBufferAgreesWithVulkanRenderer) {
   for (int y = 0; y < view.height; ++y)
     for (int x = 0; x < view.width; ++x) {
       const size_t i = size_t(y) * view.width + x;
-      if (!(vk.position.rgba[4 * i + 3] > 0.0f)) continue;
+      if (!(vk->position.rgba[4 * i + 3] > 0.0f)) continue;
       const Hit h = tracer.intersect(view.eye, glm::vec3(pixelRayDirection(view, x, y)), 0.0f, 1e30f);
       if (!h.hit) continue;
       ++both;
       const glm::dvec3 p = glm::dvec3(view.eye) + glm::dvec3(pixelRayDirection(view, x, y)) * double(h.t);
-      const glm::dvec3 q(vk.position.rgba[4 * i], vk.position.rgba[4 * i + 1], vk.position.rgba[4 * i + 2]);
+      const glm::dvec3 q(vk->position.rgba[4 * i], vk->position.rgba[4 * i + 1],
+                         vk->position.rgba[4 * i + 2]);
       close += glm::length(p - (level.origin + q)) <= 2e-3;
     }
   EXPECT_LT(double(close), 0.5 * double(both)) << "a half-pixel shift must not pass the position check";
@@ -262,15 +272,11 @@ TEST(ReferenceImage, GBufferStepsThroughBackFacesLikeTheRasterizer) {
       backFirst += h.hit && !h.frontFace;
     }
   ASSERT_GT(backFirst, size_t(view.width * view.height / 4)) << "the view must look through back faces";
-  RenderResult vk;
-  try {
-    vk = renderLevel(toRenderMesh(scene), level, query, view);
-  } catch (const std::runtime_error& e) {
-    if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
-    throw;
-  }
+  std::string why;
+  const std::optional<RenderResult> vk = vulkanRender(scene, level, query, view, why);
+  if (!vk) GTEST_SKIP() << why;
   const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view);
-  const Agreement a = compare(vk, g, level.origin, 2e-3);
+  const Agreement a = compare(*vk, g, level.origin, 2e-3);
   std::printf("%zu of %d rays meet a back face first; mask agreement %.4f, position agreement %.4f\n",
               backFirst, view.width * view.height, a.mask, a.position);
   EXPECT_GE(a.mask, 0.99);
