@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -42,7 +43,8 @@ const char* occlusionKindText(const Level& level, int32_t tet) {
 // What the answer is made of, in the runtime's own terms (ProbeQuery::shade): the tet, its probes, the
 // occlusion data's visibility and the fallback share. Printed after the r,g,b line so scripts can read line 1.
 // With a tracer, also what rays from the point (moved off the surface along n by the tracer's epsilon) to each
-// probe say: where the data and the rays disagree, the occlusion data is the culprit.
+// probe say (where the data and the rays disagree, the occlusion data is the culprit), and which side of the
+// first surface along n the point faces (from behind: it may lie inside solid geometry).
 void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n, const glm::vec3& answer,
              const SceneTracer* tracer) {
   const Level& level = query.level();
@@ -90,6 +92,17 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
         "  fallback share %.3f: the data says the point sees %s of its probes; the answer blends toward the "
         "nearest probe in front of the surface, capped by the unoccluded blend (docs/occlusion.md)\n",
         fallback, fallback >= 1.0f ? "none" : "little");
+  if (tracer) {
+    FlushDenormalsScope ftz;
+    const glm::vec3 origin = glm::vec3(world) + n * tracer->rayEpsilon();
+    const Hit h = tracer->intersect(origin, n, 0.0f, std::numeric_limits<float>::infinity());
+    if (!h.hit)
+      std::printf("  along the normal: open (no surface)\n");
+    else
+      std::printf("  along the normal: a surface %.3f m away, met from its %s\n", h.t,
+                  h.frontFace ? "front (the point is in open space)"
+                              : "back (the point may be inside solid geometry)");
+  }
   std::printf("  answer %.4g, %.4g, %.4g W/m^2 (luminance %.4g)\n", answer.r, answer.g, answer.b,
               0.2126 * answer.r + 0.7152 * answer.g + 0.0722 * answer.b);
 }
@@ -109,7 +122,9 @@ int cmdQuery(int argc, char** argv) {
         ""},
        {"--scene", "", "SCENE",
         "with --explain: also trace rays from the point to each probe in this scene (column rays: clear, hit "
-        "by an opaque surface, or back = behind the surface) to check the occlusion data",
+        "by an opaque surface, or back = behind the surface) to check the occlusion data, and along the "
+        "normal "
+        "(a surface met from behind: the point may be inside solid geometry)",
         ""}});
   if (!args.parse(argc, argv)) return 0;
   if (args.positional().empty()) throw UsageError("missing LEVEL.tpb");
