@@ -47,14 +47,21 @@ fuzz: build
 # tools/sanitize/lsan.supp with the reason. SANITIZE_TARGETS: `all` (the default) or the test executables to
 # build and run (CI: the module tests; the CLI's tests need every module built again with ASan).
 SANITIZE_TARGETS ?= all
-# Never under the sanitizers: the visual tests (lavapipe's LLVM JIT under ASan) and the ten-million-query
-# sweeps; with a subset of targets also the script tests that run the CLI binary it does not build.
-SANITIZE_EXCLUDE := _NOT_BUILT|^Visual\.|TenMillionQueries$(if $(filter all,$(SANITIZE_TARGETS)),,|^distributed\.|^InstallPackage\.)
+# Never under the sanitizers: the visual tests (lavapipe's LLVM JIT under ASan), the ten-million-query sweeps
+# and the install test (it builds an outside project against the installed library, which is instrumented
+# here, without the sanitizer runtime: a link error, not a finding); with a subset of targets also the script
+# tests that run the CLI binary it does not build.
+SANITIZE_EXCLUDE := _NOT_BUILT|^Visual\.|TenMillionQueries|^InstallPackage\.$(if $(filter all,$(SANITIZE_TARGETS)),,|^distributed\.)
+# The Vulkan loader dlcloses the lavapipe driver at vkDestroyInstance; what the driver's globals still pointed
+# to then reads as 240 bytes "leaked" from an unknown module, which no suppression can name. Preloading the
+# driver keeps it mapped to the end of the process (its memory stays reachable: nothing is reported).
+LAVAPIPE := $(firstword $(shell sed -n 's/.*"library_path": *"\([^"]*\)".*/\1/p' /usr/share/vulkan/icd.d/lvp_icd*.json 2>/dev/null))
+SANITIZE_PRELOAD := $(if $(LAVAPIPE),LD_PRELOAD=$(LAVAPIPE) ,)
 test-sanitize: setup
 	@cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTETRAPROBE_SANITIZE=ON \
 		-DTETRAPROBE_BUILD_BENCH=OFF -DTETRAPROBE_WERROR=$(WERROR) >/dev/null
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)
-	@cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	@cd $(SANITIZE_DIR) && $(SANITIZE_PRELOAD)ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:verify_asan_link_order=0 \
 		LSAN_OPTIONS=suppressions=$(CURDIR)/tools/sanitize/lsan.supp:print_suppressions=0 \
 		UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 		ctest --output-on-failure -j $(JOBS) -E "$(SANITIZE_EXCLUDE)"
