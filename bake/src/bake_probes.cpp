@@ -244,23 +244,15 @@ struct ShardRole {
   const ShardBake* pass1 = nullptr;           // round 2: the own probes' pass-1 states and the floor
 };
 
-void toState(const AdaptiveProbe& a, ProbeBakeState& s) {
+// The running sums both records share (AdaptiveProbe <-> ProbeBakeState, either way): acc, batches, mean, m2.
+template <class From, class To>
+void copySums(const From& from, To& to) {
   for (int i = 0; i < kShCoeffCount; ++i)
-    for (int c = 0; c < 3; ++c) s.acc[i][c] = a.acc[i][c];
-  s.batches = a.batches;
+    for (int c = 0; c < 3; ++c) to.acc[i][c] = from.acc[i][c];
+  to.batches = from.batches;
   for (int k = 0; k < 6; ++k) {
-    s.mean[k] = a.mean[k];
-    s.m2[k] = a.m2[k];
-  }
-}
-
-void fromState(const ProbeBakeState& s, AdaptiveProbe& a) {
-  for (int i = 0; i < kShCoeffCount; ++i)
-    for (int c = 0; c < 3; ++c) a.acc[i][c] = s.acc[i][c];
-  a.batches = s.batches;
-  for (int k = 0; k < 6; ++k) {
-    a.mean[k] = s.mean[k];
-    a.m2[k] = s.m2[k];
+    to.mean[k] = from.mean[k];
+    to.m2[k] = from.m2[k];
   }
 }
 
@@ -336,7 +328,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         if (s.batches < minBatches || s.batches > maxBatches)
           throw InputError("bake merge: shard state for probe " + std::to_string(i) + " is inconsistent");
         seen[i] = 1;
-        fromState(s, state[i]);
+        copySums(s, state[i]);
         achieved[i] = s.achieved;
         taps[i].intersects = s.intersectRays;
         taps[i].occludeds = s.occludedRays;
@@ -360,7 +352,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
             throw InputError("bake: round-1 state for probe " + std::to_string(i) +
                              " does not belong to this shard");
           seen[i] = 1;
-          fromState(r.states[k], state[i]);
+          copySums(r.states[k], state[i]);
           taps[i].intersects = r.states[k].intersectRays;
           taps[i].occludeds = r.states[k].occludedRays;
         }
@@ -415,7 +407,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         for (size_t i = 0; i < probes.size(); ++i) {
           if (skipped(i) || !own(i)) continue;
           ProbeBakeState s;
-          toState(state[i], s);
+          copySums(state[i], s);
           s.achieved = achieved[i];
           s.intersectRays = taps[i].intersects;
           s.occludedRays = taps[i].occludeds;
@@ -541,7 +533,7 @@ ShardBake bakeProbesShardPass2(const SceneTracer& tracer, const std::vector<glm:
 
 double probeBakeMean(const ProbeBakeState& state) {
   AdaptiveProbe a;
-  fromState(state, a);
+  copySums(state, a);
   return std::abs(adaptiveMean(a));
 }
 

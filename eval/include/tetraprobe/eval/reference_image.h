@@ -28,8 +28,8 @@ struct ReferenceGBuffer {
   int width = 0, height = 0;
   std::vector<uint8_t> hit;          // 1 where the ray met a triangle, 0 for background
   std::vector<glm::dvec3> position;  // world metres, on the triangle (from barycentrics); 0 for background
-  std::vector<glm::vec3> normal;     // unit geometric normal (front face: towards the camera); 0 for background
-  std::vector<uint32_t> triangle;    // index into Scene::triangles; 0 for background
+  std::vector<glm::vec3> normal;   // unit geometric normal (front face: towards the camera); 0 for background
+  std::vector<uint32_t> triangle;  // index into Scene::triangles; 0 for background
   size_t hitCount() const;
 };
 
