@@ -56,7 +56,6 @@ struct Candidate {
   std::array<uint8_t, kShadowMapBlockBytes> texels{};
   uint64_t agreeing = 0, leaking = 0;
   uint64_t surfaceAgreeing = 0;  // of the answers for surface samples
-  uint64_t blackouts = 0;        // samples the data sends to the fallback though rays see a weighted probe
 };
 
 struct TetResult {
@@ -65,6 +64,7 @@ struct TetResult {
   uint64_t answers = 0;
   uint64_t surfaceAnswers = 0;
   uint64_t rays = 0;
+  uint64_t blackouts = 0;  // of the chosen data (countBlackouts)
 };
 
 struct Context {
@@ -186,7 +186,7 @@ std::vector<Sample> makeSamples(const Context& ctx, const TetFrame& frame, const
 }
 
 void score(Candidate& c, const std::vector<Sample>& samples, const BaryFrame& bary) {
-  c.agreeing = c.leaking = c.surfaceAgreeing = c.blackouts = 0;
+  c.agreeing = c.leaking = c.surfaceAgreeing = 0;
   const OcclusionPlane* planes = c.planes.data();
   const uint8_t* texels = c.texels.data();
   for (const Sample& s : samples) {
@@ -198,14 +198,24 @@ void score(Candidate& c, const std::vector<Sample>& samples, const BaryFrame& ba
         ++c.surfaceAgreeing;
       if (stored && !truth) ++c.leaking;
     }
-    // The run time's own test (applyOcclusion): the data's answer falls back where the rays' would not.
+  }
+}
+
+// Samples the chosen data sends to the run-time fallback (applyOcclusion's share > 0) where the rays' answer
+// would not: points that see a probe by rays but none by the data.
+uint64_t countBlackouts(const Candidate& c, const std::vector<Sample>& samples, const BaryFrame& bary) {
+  uint64_t n = 0;
+  for (const Sample& s : samples) {
     float storedFallback = 0.0f, truthFallback = 0.0f;
-    applyOcclusion(s.weights, vis, &storedFallback);
+    applyOcclusion(s.weights,
+                   evaluateTetOcclusion(c.rec, c.planes.data(), c.texels.data(), bary, s.weights, s.normal),
+                   &storedFallback);
     const glm::vec4 truthVis(float(s.visible & 1u), float(s.visible >> 1 & 1u), float(s.visible >> 2 & 1u),
                              float(s.visible >> 3 & 1u));
     applyOcclusion(s.weights, truthVis, &truthFallback);
-    if (storedFallback > 0.0f && !(truthFallback > 0.0f)) ++c.blackouts;
+    n += storedFallback > 0.0f && !(truthFallback > 0.0f);
   }
+  return n;
 }
 
 // Polygons grouped by plane, largest total area first (ties: first met).
@@ -295,22 +305,11 @@ void makeShadowMaps(Candidate& c, const Context& ctx, const TetFrame& frame, uin
   c.rec = makeTetOcclusion(kOcclusionShadowMaps, 0, 0, 0);
 }
 
-TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& scratch) {
-  TetResult r;
-  const Tet& tet = ctx.level.tets[index];
-  const BaryFrame bary = baryFrame(tet, ctx.level.probes);  // the runtime's weights (occlusion.h)
-  glm::dvec3 p[4];
-  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(ctx.level.probes[size_t(tet.v[i])]);
-  const TetFrame frame = makeTetFrame(p);
-  if (!frame.valid) return r;
-  const std::vector<Polygon> polys = clippedGeometry(ctx, frame, scratch);
-  if (polys.empty()) return r;
-  r.hasGeometry = true;
-  const std::vector<Sample> samples = makeSamples(ctx, frame, tet, bary, polys, r.rays);
-  r.answers = 4 * uint64_t(samples.size());
-  for (const Sample& s : samples)
-    if (s.normal != glm::vec3(0.0f)) r.surfaceAnswers += 4;
-  const double need = ctx.options.minAgreement * double(r.answers);
+// The data options.mode asks for, scored against the samples (see buildOcclusion).
+Candidate chooseCandidate(const Context& ctx, const TetFrame& frame, const BaryFrame& bary,
+                          const std::vector<Polygon>& polys, const std::vector<Sample>& samples,
+                          uint64_t& rays) {
+  const double need = ctx.options.minAgreement * 4.0 * double(samples.size());
   const OcclusionMode mode = ctx.options.mode;
 
   // Candidates in order of cost; auto takes the first that is good enough, else the best.
@@ -323,10 +322,7 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
     haveBest = true;
   };
   auto goodEnough = [&](const Candidate& c) { return double(c.agreeing) >= need; };
-  if (mode == OcclusionMode::kAuto && goodEnough(none)) {
-    r.chosen = none;
-    return r;
-  }
+  if (mode == OcclusionMode::kAuto && goodEnough(none)) return none;
   if (mode == OcclusionMode::kAuto || mode == OcclusionMode::kPlanes) {
     // Greedy forward selection: each added plane is the candidate cluster (largest kCandidateClusters by
     // area) that answers the most samples right together with the planes already chosen (ties: larger area).
@@ -353,20 +349,36 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
       used[bestIndex] = true;
       chosen.back() = clusters[bestIndex];
       consider(bestAdd);
-      if (mode == OcclusionMode::kAuto && goodEnough(bestAdd)) {
-        r.chosen = bestAdd;
-        return r;
-      }
+      if (mode == OcclusionMode::kAuto && goodEnough(bestAdd)) return bestAdd;
     }
   }
 
   if (mode == OcclusionMode::kAuto || mode == OcclusionMode::kShadowMaps) {
     Candidate c;
-    makeShadowMaps(c, ctx, frame, r.rays);
+    makeShadowMaps(c, ctx, frame, rays);
     score(c, samples, bary);
     consider(c);
   }
-  r.chosen = haveBest ? best : none;
+  return haveBest ? best : none;
+}
+
+TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& scratch) {
+  TetResult r;
+  const Tet& tet = ctx.level.tets[index];
+  const BaryFrame bary = baryFrame(tet, ctx.level.probes);  // the runtime's weights (occlusion.h)
+  glm::dvec3 p[4];
+  for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(ctx.level.probes[size_t(tet.v[i])]);
+  const TetFrame frame = makeTetFrame(p);
+  if (!frame.valid) return r;
+  const std::vector<Polygon> polys = clippedGeometry(ctx, frame, scratch);
+  if (polys.empty()) return r;
+  r.hasGeometry = true;
+  const std::vector<Sample> samples = makeSamples(ctx, frame, tet, bary, polys, r.rays);
+  r.answers = 4 * uint64_t(samples.size());
+  for (const Sample& s : samples)
+    if (s.normal != glm::vec3(0.0f)) r.surfaceAnswers += 4;
+  r.chosen = chooseCandidate(ctx, frame, bary, polys, samples, r.rays);
+  r.blackouts = countBlackouts(r.chosen, samples, bary);
   return r;
 }
 
@@ -461,7 +473,7 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
       st.answers += r.answers;
       st.agreeing += r.chosen.agreeing;
       st.leaking += r.chosen.leaking;
-      st.blackouts += r.chosen.blackouts;
+      st.blackouts += r.blackouts;
       st.surfaceAnswers += r.surfaceAnswers;
       st.surfaceAgreeing += r.chosen.surfaceAgreeing;
       if (double(r.chosen.agreeing) < options.minAgreement * double(r.answers)) ++st.belowMinAgreement;
