@@ -815,7 +815,9 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   // the probes' SH as the occluded one (a GPU may run both sides of the branch below).
   float unused;
   vec4 u = tetraprobeOccApply(loc.weights, vec4(1.0), unused);
-  vec4 q = u * max(tetraprobeProbeFront(loc.tet, localPos, normal), vec4(TETRAPROBE_OCC_BEHIND));
+  // The front factors only matter where the fallback runs (p is not used elsewhere): skip their fetches.
+  vec4 front = fallback > 0.0 ? tetraprobeProbeFront(loc.tet, localPos, normal) : vec4(1.0);
+  vec4 q = u * max(front, vec4(TETRAPROBE_OCC_BEHIND));
   vec4 p = q * q;
   p = p * p;
   p = p * p;

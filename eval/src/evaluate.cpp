@@ -388,15 +388,9 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
           [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
             const Location loc = query->locate(p);
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
-            const Tet& t = lv->tets[size_t(loc.tet)];
             const glm::vec3 local(p - lv->origin);
-            const ShRgb* probes[4] = {&lv->sh[size_t(t.v[0])], &lv->sh[size_t(t.v[1])],
-                                      &lv->sh[size_t(t.v[2])], &lv->sh[size_t(t.v[3])]};
-            glm::vec3 toProbe[4];
-            for (int i = 0; i < 4; ++i) toProbe[i] = lv->probes[size_t(t.v[i])] - local;
-            return occludedIrradiance(probes, loc.weights,
-                                      occlusionVisibility(*lv, *occlusion, loc.tet, local, n), n,
-                                      probeFront(toProbe, n));
+            return occludedIrradianceAt(*lv, loc.tet, loc.weights,
+                                        occlusionVisibility(*lv, *occlusion, loc.tet, local, n), local, n);
           }};
 }
 

@@ -245,4 +245,16 @@ glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weig
   return (1.0f - f) * visible + f * glm::min(nearest, blend);
 }
 
+glm::vec3 occludedIrradianceAt(const Level& level, int32_t tet, const glm::vec4& weights,
+                               const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal) {
+  const Tet& t = level.tets[size_t(tet)];
+  const ShRgb* probes[4];
+  glm::vec3 toProbe[4];
+  for (int i = 0; i < 4; ++i) {
+    probes[i] = &level.sh[size_t(t.v[i])];
+    toProbe[i] = level.probes[size_t(t.v[i])] - local;
+  }
+  return occludedIrradiance(probes, weights, visibility, normal, probeFront(toProbe, normal));
+}
+
 }  // namespace tetraprobe

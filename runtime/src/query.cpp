@@ -660,13 +660,7 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
     }
     float fallback = 0.0f;
     weights = applyOcclusion(weights, vis, &fallback);
-    if (fallback > 0.0f) {
-      const ShRgb* probes[4] = {&level_.sh[size_t(t.v[0])], &level_.sh[size_t(t.v[1])],
-                                &level_.sh[size_t(t.v[2])], &level_.sh[size_t(t.v[3])]};
-      glm::vec3 toProbe[4];
-      for (int i = 0; i < 4; ++i) toProbe[i] = level_.probes[size_t(t.v[i])] - local;
-      return occludedIrradiance(probes, loc.weights, vis, normal, probeFront(toProbe, normal));
-    }
+    if (fallback > 0.0f) return occludedIrradianceAt(level_, loc.tet, loc.weights, vis, local, normal);
   }
   return blendIrradiance(level_.sh, t, weights, normal);
 }

@@ -68,6 +68,8 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   // The rays column only with a tracer, so the rows read the same as before without one.
   std::printf("  %-8s %-36s %9s %8s %10s %9s %s%s\n", "probe", "position (world, m)", "distance", "weight",
               "visibility", "after occ", tracer ? " rays " : "", " E(n) r,g,b W/m^2");
+  FlushDenormalsScope ftz;  // for the tracer's rays
+  const glm::vec3 origin = glm::vec3(world) + n * (tracer ? tracer->rayEpsilon() : 0.0f);
   for (int i = 0; i < 4; ++i) {
     const int32_t p = t.v[i];
     const glm::dvec3 pw = level.origin + glm::dvec3(level.probes[size_t(p)]);
@@ -76,8 +78,6 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
     std::snprintf(pos, sizeof pos, "%.3f, %.3f, %.3f", pw.x, pw.y, pw.z);
     const char* rays = "";
     if (tracer) {
-      FlushDenormalsScope ftz;
-      const glm::vec3 origin = glm::vec3(world) + n * tracer->rayEpsilon();
       const glm::vec3 d = glm::vec3(pw) - origin;
       const float len = glm::length(d);
       rays = glm::dot(d, n) < 0.0f                                              ? " back "
@@ -93,8 +93,6 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
         "nearest probe in front of the surface, capped by the unoccluded blend (docs/occlusion.md)\n",
         fallback, fallback >= 1.0f ? "none" : "little");
   if (tracer) {
-    FlushDenormalsScope ftz;
-    const glm::vec3 origin = glm::vec3(world) + n * tracer->rayEpsilon();
     const Hit h = tracer->intersect(origin, n, 0.0f, std::numeric_limits<float>::infinity());
     if (!h.hit)
       std::printf("  along the normal: open (no surface)\n");

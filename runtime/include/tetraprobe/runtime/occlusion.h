@@ -111,4 +111,9 @@ inline constexpr float kOcclusionBehindShare = 1e-3f;
 glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weights,
                              const glm::vec4& visibility, const glm::vec3& normal, const glm::vec4& front);
 
+// occludedIrradiance for tet `tet` of `level` at local-frame point `local`: its probes' SH and their front
+// factors there (probeFront). `tet` must be a valid index.
+glm::vec3 occludedIrradianceAt(const Level& level, int32_t tet, const glm::vec4& weights,
+                               const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal);
+
 }  // namespace tetraprobe
