@@ -10,9 +10,10 @@
 // outside, or a face plane of the tet puts all the region's vertices outside, each within the margin (a
 // tet touching the region only within rounding is dropped). Separating planes along edge pairs are not
 // tried, so a list may keep a tet that misses the region: a node whose region lies inside one of its tets
-// (all region vertices within the margin of it) is a leaf naming that tet all the same. A leaf is also
-// made, naming the tet holding the region's centroid best, when no face plane of the node's tets cuts its
-// region or at depth kMaxDepth (unprovenLeaves counts those).
+// (all region vertices within the margin of it) is a leaf naming that tet all the same. A node left with at
+// most leafTets tets is a leaf naming the tet holding its region's centroid best (the walk from there crosses
+// only tets of that list). A leaf is also made that way when no face plane of the node's tets cuts its region
+// or at depth kMaxDepth (unprovenLeaves counts those).
 //
 // Robustness: the query evaluates a node's float plane in double; the region is clipped by that same float
 // plane (in double), so a point's leaf region contains it, up to the clipping's rounding (~1e-16 relative).
@@ -194,8 +195,8 @@ struct CellTree {  // one cell's tree, built apart and appended in cell order (d
 class TreeBuilder {
  public:
   // corners: the 4 vertex positions of every tet, contiguous (one cache line a tet instead of five).
-  TreeBuilder(const std::vector<glm::vec3>& corners, double margin, double eps, CellTree& out)
-      : corners_(corners), margin_(margin), eps_(eps), out_(out) {}
+  TreeBuilder(const std::vector<glm::vec3>& corners, double margin, double eps, size_t leafTets, CellTree& out)
+      : corners_(corners), margin_(margin), eps_(eps), leafTets_(leafTets), out_(out) {}
 
   // The tets of `list` overlapping `region` (the root's list comes from bounding boxes).
   void prune(const Polytope& region, std::vector<int32_t>& list) const {
@@ -210,6 +211,8 @@ class TreeBuilder {
     if (list.size() <= kInsideCheckUpTo)
       for (int32_t t : list)
         if (holdsRegion(t, region)) return leaf(region, ~t, depth, false);
+    // A small leaf: the walk from the tet holding the centroid best crosses at most the list's other tets.
+    if (list.size() <= leafTets_) return leaf(region, ~centroidTet(region, list), depth, false);
     glm::dvec4 plane;
     float fplane[4];
     if (depth >= kMaxDepth || !choosePlane(region, list, plane, fplane))
@@ -375,13 +378,14 @@ class TreeBuilder {
 
   const std::vector<glm::vec3>& corners_;
   double margin_, eps_;
+  size_t leafTets_;
   CellTree& out_;
 };
 
 }  // namespace
 
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets, float cellSize,
-                       int threads) {
+                       int threads, int leafTets) {
   CellGrid grid;
   grid.cellSize = cellSize > 0.0f && std::isfinite(cellSize) ? cellSize : 16.0f;
   if (tets.empty()) return grid;
@@ -458,7 +462,7 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
       const int32_t* key = refs[cellStart[c]].key;
       const glm::dvec3 lo = gmin + glm::dvec3(key[0], key[1], key[2]) * cs;
       const Polytope box = boxPolytope(lo, lo + cs);
-      TreeBuilder builder(corners, margin, eps, trees[c]);
+      TreeBuilder builder(corners, margin, eps, size_t(std::max(1, leafTets)), trees[c]);
       builder.prune(box, list);
       trees[c].root = builder.build(box, list, 0);
     }

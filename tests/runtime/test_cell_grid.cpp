@@ -344,38 +344,66 @@ TEST(CellGrid, DeterministicForAnyThreadCount) {
   }
 }
 
-// A point inside a tet (all weights >= 1e-3) descends to a leaf naming that tet: the regions the build tracks
-// are exact, so the leaf tet is the answer itself and the walk takes no step. Leaves the build could not
-// prove (unprovenLeaves: a region thinner than the margin that no face plane cuts) are rare and tiny, and
-// no sampled point falls in one. Also: the tree's statistics are consistent.
-TEST(CellGrid, LeafNamesTheTetHoldingThePoint) {
+// The tets' adjacency distance (steps across shared faces) from tet `from` to tet `to`, by breadth-first
+// search; -1 when more than maxSteps.
+int tetDistance(const Level& level, int32_t from, int32_t to, int maxSteps) {
+  std::map<int32_t, int> seen{{from, 0}};
+  std::vector<int32_t> frontier{from};
+  for (int d = 0; d <= maxSteps; ++d) {
+    std::vector<int32_t> next;
+    for (int32_t t : frontier) {
+      if (t == to) return d;
+      for (int32_t n : level.tets[size_t(t)].n)
+        if (n >= 0 && seen.emplace(n, d + 1).second) next.push_back(n);
+    }
+    frontier.swap(next);
+  }
+  return -1;
+}
+
+// Points well inside a tet (all weights >= 1e-3): x, its tet t and the level's tets, for the leaf tests.
+template <typename F>
+size_t forPointsInsideTets(const Level& level, uint64_t seed, F&& f) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  size_t points = 0;
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
+    for (int s = 0; s < 20; ++s) {
+      double w[4], sum = 0.0;
+      for (double& x : w) sum += (x = u(rng));
+      for (double& x : w) x = 1e-3 + (1.0 - 4e-3) * x / sum;
+      glm::dvec3 x(0.0);
+      for (int i = 0; i < 4; ++i) x += w[i] * p[i];
+      double exact[4];
+      test::exactTetWeights(level, level.tets[t], x, exact);
+      if (*std::min_element(exact, exact + 4) < 5e-4) continue;  // a sliver: x is not well inside
+      ++points;
+      f(x, int32_t(t));
+    }
+  }
+  return points;
+}
+
+// With one tet a leaf (leafTets = 1), a point inside a tet (all weights >= 1e-3) descends to a leaf naming
+// that tet: the regions the build tracks are exact, so the leaf tet is the answer itself and the walk takes
+// no step. Leaves the build could not prove (unprovenLeaves: a region thinner than the margin that no face
+// plane cuts) are rare and tiny, and no sampled point falls in one. Also: the tree's statistics are
+// consistent.
+TEST(CellGrid, OneTetLeafNamesTheTetHoldingThePoint) {
   for (int which = 0; which < 3; ++which) {
     const Level level = which == 0 ? ballLevel() : which == 1 ? boxLevel() : latticeLevel();
     for (float cellSize : {16.0f, 2.0f}) {
-      const CellGrid g = buildCellGrid(level.probes, level.tets, cellSize, 2);
+      const CellGrid g = buildCellGrid(level.probes, level.tets, cellSize, 2, 1);
       EXPECT_LE(100 * g.unprovenLeaves, g.leaves) << "level " << which << ", " << cellSize << " m cells";
       EXPECT_GE(g.leaves, level.tets.size());                  // every tet holds a point in some leaf
       EXPECT_EQ(g.leaves, g.nodes.size() + occupiedCells(g));  // a binary tree per cell: leaves = nodes + 1
       EXPECT_LE(g.meanDepth, double(g.maxDepth));
-      std::mt19937_64 rng(5 + uint64_t(which));
-      std::uniform_real_distribution<double> u(0.0, 1.0);
-      size_t misses = 0, points = 0;
-      for (size_t t = 0; t < level.tets.size(); ++t) {
-        glm::dvec3 p[4];
-        for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(level.tets[t].v[i])]);
-        for (int s = 0; s < 20; ++s) {
-          double w[4], sum = 0.0;
-          for (double& x : w) sum += (x = u(rng));
-          for (double& x : w) x = 1e-3 + (1.0 - 4e-3) * x / sum;
-          glm::dvec3 x(0.0);
-          for (int i = 0; i < 4; ++i) x += w[i] * p[i];
-          double exact[4];
-          test::exactTetWeights(level, level.tets[t], x, exact);
-          if (*std::min_element(exact, exact + 4) < 5e-4) continue;  // a sliver: x is not well inside
-          ++points;
-          misses += cellGridLeaf(g, x) != int32_t(t);
-        }
-      }
+      size_t misses = 0;
+      const size_t points = forPointsInsideTets(level, 5 + uint64_t(which), [&](const glm::dvec3& x, int32_t t) {
+        misses += cellGridLeaf(g, x) != t;
+      });
       EXPECT_GT(points, 10 * level.tets.size());
       EXPECT_EQ(misses, 0u) << "level " << which << ", " << cellSize << " m cells: " << misses << " of "
                             << points;
@@ -385,6 +413,38 @@ TEST(CellGrid, LeafNamesTheTetHoldingThePoint) {
           which, double(cellSize), level.tets.size(), g.leaves, g.nodes.size(),
           double(cellGridBytes(g)) / double(level.tets.size()), g.maxDepth, g.meanDepth);
     }
+  }
+}
+
+// The default tree stops at kDefaultLeafTets tets a leaf and names the tet holding the leaf region's centre:
+// it has fewer nodes than the one-tet tree (memory, docs/point_location.md), and from the leaf's tet the tet
+// holding a point is at most kDefaultLeafTets - 1 face steps away (the tets meeting a convex region are
+// connected through faces meeting it, and the leaf's list holds all of them), and locate() still answers
+// with that tet. Would fail if a leaf were made with more tets than the stop, or named a tet off its region.
+TEST(CellGrid, SmallLeavesNameATetAFewStepsFromThePoint) {
+  for (int which = 0; which < 3; ++which) {
+    const Level level = which == 0 ? ballLevel() : which == 1 ? boxLevel() : latticeLevel();
+    const CellGrid one = buildCellGrid(level.probes, level.tets, 16.0f, 2, 1);
+    const CellGrid g = buildCellGrid(level.probes, level.tets, 16.0f, 2);
+    EXPECT_LT(3 * g.nodes.size(), 2 * one.nodes.size()) << "level " << which;
+    EXPECT_EQ(g.leaves, g.nodes.size() + occupiedCells(g));
+    Level withGrid = level;
+    withGrid.cellGrid = g;
+    const ProbeQuery query(withGrid, 16.0f, 2);
+    ASSERT_EQ(query.cellGrid().nodes.size(), g.nodes.size());
+    size_t hits = 0, located = 0;
+    int worst = 0;
+    const size_t points = forPointsInsideTets(level, 9 + uint64_t(which), [&](const glm::dvec3& x, int32_t t) {
+      const int32_t leaf = cellGridLeaf(g, x);
+      hits += leaf == t;
+      const int d = leaf < 0 ? -1 : tetDistance(level, leaf, t, 8);
+      worst = d < 0 ? 99 : std::max(worst, d);
+      located += query.locate(level.origin + x).tet == t;
+    });
+    EXPECT_LE(worst, kDefaultLeafTets - 1) << "level " << which;
+    EXPECT_EQ(located, points) << "level " << which;
+    std::printf("level %d: nodes %zu (one tet a leaf: %zu), leaf tet is the point's for %.3f, worst %d steps\n",
+                which, g.nodes.size(), one.nodes.size(), double(hits) / double(points), worst);
   }
 }
 

@@ -134,6 +134,10 @@ int benchLocate(int argc, char** argv) {
        {"--threads", "", "N", "threads for the runtime methods, 0 = all cores", "0"},
        {"--brute", "", "N", "queries checked by the brute-force scan", "200"},
        {"--cell-size", "", "M", "cell grid cell size, metres", "16"},
+       {"--leaf-tets", "", "N",
+        "rebuild the cell grid stopping at N tets a leaf (1: the leaf tet is the answer; 0: the level's own "
+        "grid, else the default " + std::to_string(kDefaultLeafTets) + ")",
+        "0"},
        {"--seed", "", "N", "random seed", "1"},
        {"--no-cgal", "", "", "skip the CGAL methods (and their builds): quicker runs while tuning", ""},
        {"--save", "", "PATH", "write the level (with its cell grid) to PATH, to bench it again faster", ""},
@@ -151,6 +155,8 @@ int benchLocate(int argc, char** argv) {
   if (order != "random" && order != "coherent") throw UsageError("--order must be random or coherent");
   if (threads < 0) throw UsageError("--threads must be >= 0");
   if (!(cellSize > 0.0f)) throw UsageError("--cell-size must be positive");
+  const int leafTets = args.integer("--leaf-tets");
+  if (leafTets < 0) throw UsageError("--leaf-tets must be >= 0");
   if (threads == 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
   if ((synthetic > 0) == !args.positional().empty())
     throw UsageError("give either LEVEL.tpb or --synthetic N (N >= 4)");
@@ -171,6 +177,7 @@ int benchLocate(int argc, char** argv) {
   if (level.tets.empty()) throw InputError(source + ": the level has no tets");
 
   t0 = std::chrono::steady_clock::now();
+  if (leafTets > 0) level.cellGrid = buildCellGrid(level.probes, level.tets, cellSize, threads, leafTets);
   ProbeQuery query(level, cellSize, threads);
   const double querySeconds = seconds(t0);
   // Every method does the same work (locate, blend, evaluate): the level's occlusion, which only grid_bsp's

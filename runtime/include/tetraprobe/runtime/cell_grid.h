@@ -1,9 +1,10 @@
 // The point-location accelerator of Valient (GDC 2014, Killzone Shadow Fall): a sparse grid of cubic cells
 // (16 m by default) found through a hash table, and in each occupied cell a BSP tree over the tets that
-// overlap it, descended to a leaf naming one tet: the tet holding the leaf's whole region (built with exact
-// region tracking, cell_grid.cpp). ProbeQuery::locate takes that tet and lets the ordinary walk (query.cpp)
-// confirm it (it accepts at once, except within rounding of a face, where exact weights decide), so the
-// answer is the walk's, whatever the tree's splits. Permissive: standard library and GLM only.
+// overlap it, descended to a leaf naming one tet: the tet holding the leaf's whole region, or, in a leaf
+// whose region meets at most a handful of tets, the one holding its centre (built with exact region
+// tracking, cell_grid.cpp). ProbeQuery::locate takes that tet and lets the ordinary walk (query.cpp) confirm
+// it or step on to the tet holding the point, so the answer is the walk's, whatever the tree's splits.
+// Permissive: standard library and GLM only.
 #pragma once
 
 #include <climits>
@@ -84,12 +85,15 @@ uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 // (min/max of the tets on either side, as Godot's LightmapGI) and, more strongly, on the share of tets not
 // straddling (straddlers are copied into both children); each node keeps the
 // tets that overlap its region (a convex polytope, clipped at every split; a tet touching it only within a
-// rounding margin is dropped), and a node with one tet left, or whose region lies inside one tet, is a leaf
-// naming it. A tet whose cells would lie beyond +-2^30 on an axis (huge coordinates for the cell size) or
+// rounding margin is dropped), and a node whose region lies inside one tet is a leaf naming it; so is a node
+// with at most `leafTets` tets left, naming the one holding its region's centroid best (the query's walk
+// takes the remaining steps, usually one or two: leafTets = 1 makes the leaf's tet the answer for every
+// point, at about four times the nodes of the default on placed levels (docs/point_location.md)). A tet whose cells would lie beyond +-2^30 on an axis (huge coordinates for the cell size) or
 // number more than 4096 is left out, to be found by the walk; no float reaches an int conversion unchecked.
 // Deterministic for any `threads` (0 = all cores). Allocates the result.
+inline constexpr int kDefaultLeafTets = 6;
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets,
-                       float cellSize = 16.0f, int threads = 0);
+                       float cellSize = 16.0f, int threads = 0, int leafTets = kDefaultLeafTets);
 
 // The tet named by the leaf holding local point x, or -1 (x's cell is absent or its leaf empty: x is then
 // outside every tet overlapping the grid, up to rounding). `depth` (optional) gets the nodes descended.
