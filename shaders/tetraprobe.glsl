@@ -728,9 +728,12 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
     if (count == 0u) return vec4(1.0);
     float s[3] = float[3](1.0, 1.0, 1.0);
     for (uint k = 0u; k < count; ++k) {
-      uint o = tetraprobeOccPlaneOffset + 4u * (offset + k);
-      vec4 c = uintBitsToFloat(uvec4(tetraprobeOccData[o], tetraprobeOccData[o + 1u],
-                                     tetraprobeOccData[o + 2u], tetraprobeOccData[o + 3u]));
+      // Four snorm16 (OcclusionPlane::value): sign-extended, times the float nearest 1/32767 (exactly the
+      // CPU's 1.0f / 32767.0f, bits 0x38000100).
+      uint o = tetraprobeOccPlaneOffset + 2u * (offset + k);
+      int a = int(tetraprobeOccData[o]), b = int(tetraprobeOccData[o + 1u]);
+      vec4 c = vec4(ivec4(bitfieldExtract(a, 0, 16), bitfieldExtract(a, 16, 16), bitfieldExtract(b, 0, 16),
+                          bitfieldExtract(b, 16, 16))) * 3.0518509447574615e-05;
       precise float d = c.x * w.x + c.y * w.y + c.z * w.z + c.w * w.w;
       s[k] = tetraprobeOccSmooth(-TETRAPROBE_OCC_PLANE_HALF, TETRAPROBE_OCC_PLANE_HALF, d);
     }

@@ -79,7 +79,7 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly 
 };
 
 // Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[2 t], data[2 t + 1]: tet t's
-// record (header, cells); planes from tetraprobeOccPlaneOffset (4 float bits each); shadow-map blocks from
+// record (header, cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
 // tetraprobeOccShadowOffset (16 uints each, bytes little-endian). tetraprobeOccTetCount 0: no occlusion.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {
   uint tetraprobeOccTetCount;      // offset 0

@@ -256,14 +256,15 @@ bool makePlanes(Candidate& c, const std::vector<Cluster>& clusters, uint32_t cou
       m = std::max(m, std::abs(d[i]));
     }
     if (!(m > 0.0)) return false;
-    for (int i = 0; i < 4; ++i) c.planes[k].c[i] = float(d[i] / m);
+    c.planes[k] = makeOcclusionPlane(d[0], d[1], d[2], d[3]);  // stored in snorm16: the cells see what loads
   }
   int votes[8][4][2] = {};
   for (const Sample& s : samples) {
     const glm::vec4 w = biasWeights(bary, s.weights, s.normal);
     uint32_t cell = 0;
     for (uint32_t k = 0; k < count; ++k) {
-      const glm::vec4 pc(c.planes[k].c[0], c.planes[k].c[1], c.planes[k].c[2], c.planes[k].c[3]);
+      const glm::vec4 pc(c.planes[k].value(0), c.planes[k].value(1), c.planes[k].value(2),
+                         c.planes[k].value(3));
       if (glm::dot(pc, w) >= 0.0f) cell |= 1u << k;
     }
     for (int i = 0; i < 4; ++i) ++votes[cell][i][(s.visible >> i) & 1u];

@@ -23,7 +23,7 @@ namespace tetraprobe {
 namespace {
 
 constexpr std::array<uint8_t, 8> kMagic = {0x89, 'T', 'P', 'B', '\r', '\n', 0x1A, '\n'};
-constexpr uint32_t kVersion = 3;
+constexpr uint32_t kVersion = kLevelFormatVersion;
 constexpr uint32_t kHeaderBytes = 80;
 constexpr uint32_t kHeaderCrcOffset = 76;    // CRC-32 of header bytes [0, 76)
 constexpr uint64_t kSectionEntryBytes = 24;  // tag u32, flags u32, offset u64, size u64
@@ -54,7 +54,7 @@ constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = ta
                    kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
                    kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
-constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 16;
+constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
 // retired CGRD section, leaves of several tets, is an unknown optional tag now: skipped, the grid rebuilt.)
 constexpr uint64_t kCellGridHeaderBytes = 64;
@@ -73,6 +73,10 @@ class Writer {
     for (int i = 0; i < 8; ++i) out_.push_back(char(uint8_t(v >> (8 * i))));
   }
   void i32(int32_t v) { u32(uint32_t(v)); }
+  void i16(int16_t v) {
+    out_.push_back(char(uint8_t(uint16_t(v))));
+    out_.push_back(char(uint8_t(uint16_t(v) >> 8)));
+  }
   void f32(float v) { u32(std::bit_cast<uint32_t>(v)); }
   void f64(double v) { u64(std::bit_cast<uint64_t>(v)); }
   void patchU32(size_t at, uint32_t v) {
@@ -105,6 +109,11 @@ class Reader {
     return v;
   }
   int32_t i32() { return int32_t(u32()); }
+  int16_t i16() {
+    const auto v = uint16_t(p_[0] | p_[1] << 8);
+    p_ += 2;
+    return int16_t(v);
+  }
   float f32() { return std::bit_cast<float>(u32()); }
   double f64() { return std::bit_cast<double>(u64()); }
   const uint8_t* skip(size_t n) {
@@ -334,9 +343,11 @@ LevelResult validateLevel(const Level& level) {
       return corrupt("occlusion: " + std::to_string(occ.planes.size()) + " planes and " +
                      std::to_string(blocks) + " shadow-map blocks, the records use " +
                      std::to_string(planesUsed) + " and " + std::to_string(blocksUsed));
-    for (size_t k = 0; k < occ.planes.size(); ++k)
-      for (float x : occ.planes[k].c)
-        if (!std::isfinite(x)) return corrupt("occlusion: plane " + std::to_string(k) + " not finite");
+    for (size_t k = 0; k < occ.planes.size(); ++k) {
+      const int16_t* c = occ.planes[k].c;
+      if (c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0)
+        return corrupt("occlusion: plane " + std::to_string(k) + " is zero (no plane)");
+    }
   }
   return {};
 }
@@ -421,7 +432,7 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
       s.u32(rec.cells);
     }
     for (const OcclusionPlane& p : occ.planes)
-      for (float x : p.c) s.f32(x);
+      for (int16_t x : p.c) s.i16(x);
     s.bytes(occ.shadowMaps.data(), occ.shadowMaps.size());
   }
 
@@ -682,7 +693,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     }
     occ.planes.resize(size_t(occPlanes));
     for (OcclusionPlane& p : occ.planes)
-      for (float& x : p.c) x = body.f32();
+      for (int16_t& x : p.c) x = body.i16();
     occ.shadowMaps.resize(size_t(occBlocks * kShadowMapBlockBytes));
     if (!occ.shadowMaps.empty())
       std::memcpy(occ.shadowMaps.data(), body.skip(occ.shadowMaps.size()), occ.shadowMaps.size());

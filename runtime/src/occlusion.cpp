@@ -33,7 +33,7 @@ glm::vec4 planesVisibility(const TetOcclusion& rec, const OcclusionPlane* planes
   if (count == 0 || count > 3 || planes == nullptr) return glm::vec4(1.0f);
   float t[3] = {1.0f, 1.0f, 1.0f};  // weight of the positive side of each plane
   for (uint32_t k = 0; k < count; ++k) {
-    const glm::vec4 c(planes[k].c[0], planes[k].c[1], planes[k].c[2], planes[k].c[3]);
+    const glm::vec4 c(planes[k].value(0), planes[k].value(1), planes[k].value(2), planes[k].value(3));
     t[k] = smoothStep(-kOcclusionPlaneFalloff, kOcclusionPlaneFalloff, glm::dot(c, w));
   }
   glm::vec4 vis(0.0f);
@@ -87,6 +87,16 @@ void locateOnFace(float& u, float& v, int& iu, int& iv, bool& upper) {
 }
 
 }  // namespace
+
+OcclusionPlane makeOcclusionPlane(double d0, double d1, double d2, double d3) {
+  const double d[4] = {d0, d1, d2, d3};
+  double m = 0.0;
+  for (double x : d) m = std::max(m, std::abs(x));
+  OcclusionPlane p;
+  if (!(m > 0.0) || !std::isfinite(m)) return p;
+  for (int i = 0; i < 4; ++i) p.c[i] = int16_t(std::lround(std::clamp(d[i] / m, -1.0, 1.0) * 32767.0));
+  return p;
+}
 
 int shadowMapCell(float u, float v) {
   int iu, iv;

@@ -26,7 +26,7 @@ using runtime_detail::crc32;
 using runtime_detail::crc32Update;
 
 constexpr uint8_t kMagic[8] = {0x89, 'T', 'P', 'B', '\r', '\n', 0x1a, '\n'};
-constexpr uint32_t kVersion = 3, kHeaderBytes = 80, kMaxSections = 64;
+constexpr uint32_t kVersion = kLevelFormatVersion, kHeaderBytes = 80, kMaxSections = 64;
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);
 constexpr uint32_t kStreamVersion = 1;
 constexpr uint64_t kStreamHeaderBytes = 64, kSectorBytes = 40;
@@ -222,7 +222,7 @@ LevelResult StreamingLevel::open(const std::string& path) {
     f->blockCount = u64At(c + 16);
     if (u64At(c) != f->tetCount || f->planeCount > kOcclusionMaxOffset ||
         f->blockCount > kOcclusionMaxOffset ||
-        occlSize != 24 + 8 * f->tetCount + 16 * f->planeCount + 64 * f->blockCount)
+        occlSize != 24 + 8 * f->tetCount + 8 * f->planeCount + 64 * f->blockCount)
       return fail(LevelStatus::kCorrupt, name + "occlusion section size does not match its counts");
   }
   if (strm == 0) return fail(LevelStatus::kCorrupt, name + "no streaming index (add one: tetraprobe stream)");
@@ -379,7 +379,7 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   }
   if (f.occl != 0) {
     const uint64_t recsAt = f.occl + 24, planesAt = recsAt + 8 * f.tetCount,
-                   blocksAt = planesAt + 16 * f.planeCount;
+                   blocksAt = planesAt + 8 * f.planeCount;
     for (uint32_t t : s->tetIds) {
       if (!f.read(recsAt + 8ull * t, buf, 8)) return fail(LevelStatus::kCannotOpen, where + "read failed");
       TetOcclusion rec{u32At(buf), u32At(buf + 4)};
@@ -387,10 +387,10 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
         if (rec.planeCount() < 1 || rec.offset() + uint64_t(rec.planeCount()) > f.planeCount)
           return bad("occlusion planes out of range");
         for (uint32_t k = 0; k < rec.planeCount(); ++k) {
-          if (!f.read(planesAt + 16ull * (rec.offset() + k), buf, 16))
+          if (!f.read(planesAt + 8ull * (rec.offset() + k), buf, 8))
             return fail(LevelStatus::kCannotOpen, where + "read failed");
           OcclusionPlane pl;
-          for (int a = 0; a < 4; ++a) pl.c[a] = f32At(buf + 4 * a);
+          for (int a = 0; a < 4; ++a) pl.c[a] = int16_t(uint16_t(buf[2 * a] | buf[2 * a + 1] << 8));
           s->planes.push_back(pl);
         }
       } else if (rec.kind() == kOcclusionShadowMaps) {

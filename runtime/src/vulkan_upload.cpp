@@ -177,7 +177,7 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   if (!occ.empty() && occ.tets.size() == level.tets.size()) {
     occHeader.tetCount = uint32_t(occ.tets.size());
     occHeader.planeOffset = uint32_t(2 * occ.tets.size());
-    occHeader.shadowOffset = uint32_t(occHeader.planeOffset + 4 * occ.planes.size());
+    occHeader.shadowOffset = uint32_t(occHeader.planeOffset + 2 * occ.planes.size());
   }
   appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
   if (occHeader.tetCount > 0) {

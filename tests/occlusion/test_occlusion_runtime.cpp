@@ -281,7 +281,7 @@ TEST(OcclusionRuntime, EmptyDataMeansAllVisible) {
   EXPECT_EQ(v, glm::vec4(1.0f));
   LevelOcclusion one;
   one.tets.resize(1);
-  one.planes.push_back(OcclusionPlane{{1, 1, -1, -1}});
+  one.planes.push_back(makeOcclusionPlane(1, 1, -1, -1));
   one.tets[0] = makeTetOcclusion(kOcclusionPlanes, 1, 0, 0x0u);  // both cells see nothing
   EXPECT_EQ(occlusionVisibility(level, one, 5, glm::vec3(0.5f), glm::vec3(0.0f)), glm::vec4(1.0f));
   EXPECT_EQ(occlusionVisibility(level, one, -1, glm::vec3(0.5f), glm::vec3(0.0f)), glm::vec4(1.0f));
@@ -295,16 +295,16 @@ TEST(OcclusionRuntime, EmptyDataMeansAllVisible) {
 TEST(OcclusionRuntime, PlaneCellsSelectByValueWithSoftBand) {
   const Level level = test::makeLevel(test::regularTet());
   const Tet& t = level.tets[0];
-  OcclusionPlane plane;
+  double d[4];
   uint32_t posMask = 0, negMask = 0;
   for (int i = 0; i < 4; ++i) {
     const float z = level.probes[size_t(t.v[i])].z;
-    plane.c[i] = z > 0.5f ? 1.0f : -1.0f;  // the plane z = 0.5
+    d[i] = z > 0.5f ? 1.0 : -1.0;  // the plane z = 0.5
     (z > 0.5f ? posMask : negMask) |= 1u << i;
   }
   LevelOcclusion occ;
   occ.tets = {makeTetOcclusion(kOcclusionPlanes, 1, 0, negMask | posMask << 4)};
-  occ.planes = {plane};
+  occ.planes = {makeOcclusionPlane(d[0], d[1], d[2], d[3])};
   auto vis = [&](float z) {
     return occlusionVisibility(level, occ, 0, glm::vec3(0.5f, 0.5f, z), glm::vec3(0.0f));
   };

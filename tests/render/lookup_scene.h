@@ -64,11 +64,8 @@ inline LevelOcclusion syntheticOcclusion(const Level& level) {
       for (uint32_t c = 0; c < (1u << count); ++c) cells |= (1u + uint32_t(rng()) % 15u) << (4 * c);
       occ.tets.push_back(makeTetOcclusion(kOcclusionPlanes, count, uint32_t(occ.planes.size()), cells));
       for (uint32_t k = 0; k < count; ++k) {
-        OcclusionPlane p;
-        float m = 0.0f;
-        for (float& c : p.c) m = std::max(m, std::abs(c = u(rng)));
-        for (float& c : p.c) c /= m;
-        occ.planes.push_back(p);
+        const double a = u(rng), b = u(rng), c = u(rng), d = u(rng);
+        occ.planes.push_back(makeOcclusionPlane(a, b, c, d));
       }
     } else {
       occ.tets.push_back(makeTetOcclusion(kOcclusionShadowMaps, 0,

@@ -375,7 +375,7 @@ TEST(DebugViews, OcclusionShowsKindAndFallback) {
     } else if (k == 1 || k == 3) {
       occ.tets.push_back(
           makeTetOcclusion(kOcclusionPlanes, 1, uint32_t(occ.planes.size()), k == 1 ? 0xFFu : 0x00u));
-      occ.planes.push_back(OcclusionPlane{{1.0f, -1.0f, 0.0f, 0.0f}});
+      occ.planes.push_back(makeOcclusionPlane(1.0, -1.0, 0.0, 0.0));
     } else {
       occ.tets.push_back(makeTetOcclusion(kOcclusionShadowMaps, 0,
                                           uint32_t(occ.shadowMaps.size() / kShadowMapBlockBytes), 0));

@@ -342,7 +342,7 @@ TEST(LevelFile, RejectsOtherFilesAndVersions) {
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
   std::vector<char> b = bytesOf(dir.file("full.tpb"));
   for (uint32_t version :
-       {1u, 2u, 4u}) {  // version 1 had no section table, 2 stored rows: re-bake such levels
+       {1u, 2u, 3u, 5u}) {  // 1 had no section table, 2 stored rows, 3 float planes: re-bake such levels
     putU32(b, 8, version);
     fixHeaderCrc(b);
     writeBytes(dir.file("other.tpb"), b, b.size());
@@ -474,7 +474,10 @@ LevelOcclusion syntheticOcclusion(const Level& level) {
       uint32_t cells = 0;
       for (uint32_t c = 0; c < (1u << count); ++c) cells |= (uint32_t(rng()) & 15u) << (4 * c);
       occ.tets.push_back(makeTetOcclusion(kOcclusionPlanes, count, uint32_t(occ.planes.size()), cells));
-      for (uint32_t k = 0; k < count; ++k) occ.planes.push_back({{u(rng), u(rng), u(rng), 1.0f}});
+      for (uint32_t k = 0; k < count; ++k) {
+        const double a = u(rng), b = u(rng), c = u(rng);
+        occ.planes.push_back(makeOcclusionPlane(a, b, c, 1.0));
+      }
     } else {
       occ.tets.push_back(makeTetOcclusion(kOcclusionShadowMaps, 0,
                                           uint32_t(occ.shadowMaps.size() / kShadowMapBlockBytes), 0));
@@ -506,7 +509,7 @@ TEST(LevelFile, OcclusionRoundTripsAndEmptyWritesNoSection) {
   EXPECT_EQ(occBytes, bytesOf(dir.file("again.tpb")));
   // One more section: 24-byte table entry, 24-byte counts, 8 per tet, 16 per plane, 64 per shadow-map block.
   EXPECT_EQ(occBytes.size(), bytesOf(dir.file("none.tpb")).size() + 24 + 24 + 8 * a.tets.size() +
-                                 16 * a.planes.size() + a.shadowMaps.size());
+                                 8 * a.planes.size() + a.shadowMaps.size());
   // Dropping it again gives the bytes of a level that never had any.
   back.occlusion = {};
   ASSERT_TRUE(saveLevel(dir.file("dropped.tpb"), back));
@@ -529,7 +532,7 @@ TEST(LevelFile, RejectsInconsistentOcclusion) {
     bad.occlusion.planes.push_back({});
     EXPECT_FALSE(validateLevel(bad));
     bad = level;
-    bad.occlusion.planes[0].c[2] = NAN;
+    bad.occlusion.planes[0] = OcclusionPlane{};  // the zero plane: no plane at all
     EXPECT_FALSE(validateLevel(bad));
   }
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));

@@ -99,7 +99,7 @@ static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 6 * 
 
 // TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
 // after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes
-// from planeOffset (4 float bits each); the shadow-map blocks from shadowOffset (16 uints each, little-endian
+// from planeOffset (2 uints each: four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the shadow-map blocks from shadowOffset (16 uints each, little-endian
 // bytes). tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
 struct GpuOcclusionHeader {
   uint32_t tetCount;      // uint tetraprobeOccTetCount: 0 = no occlusion

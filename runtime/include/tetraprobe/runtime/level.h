@@ -131,6 +131,9 @@ struct LevelResult {
   explicit operator bool() const { return status == LevelStatus::kOk; }
 };
 
+// The level file format version this reader and writer implement (docs/level_format.md, version policy).
+inline constexpr uint32_t kLevelFormatVersion = 4;
+
 // The default byte limit of loadLevel: 4 GiB (a placed level of a million probes is about 0.4 GiB).
 inline constexpr uint64_t kDefaultMaxLevelBytes = uint64_t(4) << 30;
 

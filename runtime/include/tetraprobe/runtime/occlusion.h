@@ -8,7 +8,7 @@
 // tet's float BaryFrame of level.h, computed from its probe positions as the GPU does) are all the data a lookup needs besides the records below, so the GPU evaluates it
 // with the weights it already has. Records are flat, fixed-size and pointer-free (std430-ready):
 //   TetOcclusion   8 bytes per tet   (uvec2)
-//   OcclusionPlane 16 bytes per plane (vec4)
+//   OcclusionPlane 8 bytes per plane (4 x snorm16; uvec2)
 //   shadow maps    64 bytes per tet that has them (4 probes x 16 bytes: 15 lattice depths + 1 pad; uint[16])
 //
 // Bias (surfaces must not shadow themselves): a shading point with normal n is moved along n by

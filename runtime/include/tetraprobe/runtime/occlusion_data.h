@@ -34,13 +34,22 @@ inline TetOcclusion makeTetOcclusion(OcclusionKind kind, uint32_t planeCount, ui
   return TetOcclusion{uint32_t(kind) | (planeCount & 3u) << 2 | offset << 4, cells};
 }
 
-// A splitting plane in the tet's barycentric frame: c[i] is the signed distance of probe tet.v[i] to the
-// plane divided by the largest of the four absolute distances (so max |c[i]| = 1). Its value at a point with
-// weights w is dot(c, w): the signed distance in units of that largest distance. GLSL: vec4.
-struct alignas(16) OcclusionPlane {
-  float c[4] = {0, 0, 0, 0};
+// A splitting plane in the tet's barycentric frame, in snorm16: value(i) = c[i] / 32767 is the signed
+// distance of probe tet.v[i] to the plane divided by the largest of the four absolute distances (so
+// max |value(i)| = 1, up to the quantization). Its value at a point with weights w is sum_i value(i) w_i: the
+// signed distance in units of that largest distance. 16 bits hold it to 1.5e-5 of the tet's size, far below
+// the blend's half-width kOcclusionPlaneFalloff (0.02). GLSL: uvec2, c[0] | c[1] << 16 and c[2] | c[3] << 16.
+struct OcclusionPlane {
+  int16_t c[4] = {0, 0, 0, 0};
+
+  float value(int i) const { return float(c[i]) * kOcclusionPlaneUnit; }
+  static constexpr float kOcclusionPlaneUnit = 1.0f / 32767.0f;
 };
-static_assert(sizeof(OcclusionPlane) == 16, "OcclusionPlane is a std430 vec4");
+static_assert(sizeof(OcclusionPlane) == 8, "OcclusionPlane is a std430 uvec2");
+
+// The plane with coefficients d[0..3] scaled so the largest |d[i]| is 1, rounded to snorm16 (nearest). A
+// zero or non-finite d gives the zero plane (which validateLevel refuses).
+OcclusionPlane makeOcclusionPlane(double d0, double d1, double d2, double d3);
 
 // Shadow maps: 4 probes x 16 bytes, probe slot i at block * 64 + 16 i. The face opposite probe tet.v[i] is
 // split 4x4 into 16 sub-triangles (shadowMapCell); byte shadowMapVertex(a, b) (15 used, byte 15 = 255) holds
