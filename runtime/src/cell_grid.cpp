@@ -195,7 +195,8 @@ struct CellTree {  // one cell's tree, built apart and appended in cell order (d
 class TreeBuilder {
  public:
   // corners: the 4 vertex positions of every tet, contiguous (one cache line a tet instead of five).
-  TreeBuilder(const std::vector<glm::vec3>& corners, double margin, double eps, size_t leafTets, CellTree& out)
+  TreeBuilder(const std::vector<glm::vec3>& corners, double margin, double eps, size_t leafTets,
+              CellTree& out)
       : corners_(corners), margin_(margin), eps_(eps), leafTets_(leafTets), out_(out) {}
 
   // The tets of `list` overlapping `region` (the root's list comes from bounding boxes).

@@ -396,7 +396,8 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   const auto& loc = j.at("locate");
   EXPECT_EQ(loc.at("leaves").get<int64_t>(),
             loc.at("bsp_nodes").get<int64_t>() + loc.at("cells").get<int64_t>());
-  EXPECT_GE(tetraprobe::kDefaultLeafTets * loc.at("leaves").get<int64_t>(), j.at("tets").at("count").get<int64_t>());
+  EXPECT_GE(tetraprobe::kDefaultLeafTets * loc.at("leaves").get<int64_t>(),
+            j.at("tets").at("count").get<int64_t>());
   EXPECT_EQ(loc.at("bytes").get<int64_t>(),
             16 * loc.at("hash_slots").get<int64_t>() + 24 * loc.at("bsp_nodes").get<int64_t>());
 

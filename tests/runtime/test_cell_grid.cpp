@@ -401,9 +401,9 @@ TEST(CellGrid, OneTetLeafNamesTheTetHoldingThePoint) {
       EXPECT_EQ(g.leaves, g.nodes.size() + occupiedCells(g));  // a binary tree per cell: leaves = nodes + 1
       EXPECT_LE(g.meanDepth, double(g.maxDepth));
       size_t misses = 0;
-      const size_t points = forPointsInsideTets(level, 5 + uint64_t(which), [&](const glm::dvec3& x, int32_t t) {
-        misses += cellGridLeaf(g, x) != t;
-      });
+      const size_t points =
+          forPointsInsideTets(level, 5 + uint64_t(which),
+                              [&](const glm::dvec3& x, int32_t t) { misses += cellGridLeaf(g, x) != t; });
       EXPECT_GT(points, 10 * level.tets.size());
       EXPECT_EQ(misses, 0u) << "level " << which << ", " << cellSize << " m cells: " << misses << " of "
                             << points;
@@ -434,17 +434,19 @@ TEST(CellGrid, SmallLeavesNameATetAFewStepsFromThePoint) {
     ASSERT_EQ(query.cellGrid().nodes.size(), g.nodes.size());
     size_t hits = 0, located = 0;
     int worst = 0;
-    const size_t points = forPointsInsideTets(level, 9 + uint64_t(which), [&](const glm::dvec3& x, int32_t t) {
-      const int32_t leaf = cellGridLeaf(g, x);
-      hits += leaf == t;
-      const int d = leaf < 0 ? -1 : tetDistance(level, leaf, t, 8);
-      worst = d < 0 ? 99 : std::max(worst, d);
-      located += query.locate(level.origin + x).tet == t;
-    });
+    const size_t points =
+        forPointsInsideTets(level, 9 + uint64_t(which), [&](const glm::dvec3& x, int32_t t) {
+          const int32_t leaf = cellGridLeaf(g, x);
+          hits += leaf == t;
+          const int d = leaf < 0 ? -1 : tetDistance(level, leaf, t, 8);
+          worst = d < 0 ? 99 : std::max(worst, d);
+          located += query.locate(level.origin + x).tet == t;
+        });
     EXPECT_LE(worst, kDefaultLeafTets - 1) << "level " << which;
     EXPECT_EQ(located, points) << "level " << which;
-    std::printf("level %d: nodes %zu (one tet a leaf: %zu), leaf tet is the point's for %.3f, worst %d steps\n",
-                which, g.nodes.size(), one.nodes.size(), double(hits) / double(points), worst);
+    std::printf(
+        "level %d: nodes %zu (one tet a leaf: %zu), leaf tet is the point's for %.3f, worst %d steps\n",
+        which, g.nodes.size(), one.nodes.size(), double(hits) / double(points), worst);
   }
 }
 

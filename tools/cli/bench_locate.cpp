@@ -136,7 +136,8 @@ int benchLocate(int argc, char** argv) {
        {"--cell-size", "", "M", "cell grid cell size, metres", "16"},
        {"--leaf-tets", "", "N",
         "rebuild the cell grid stopping at N tets a leaf (1: the leaf tet is the answer; 0: the level's own "
-        "grid, else the default " + std::to_string(kDefaultLeafTets) + ")",
+        "grid, else the default " +
+            std::to_string(kDefaultLeafTets) + ")",
         "0"},
        {"--seed", "", "N", "random seed", "1"},
        {"--no-cgal", "", "", "skip the CGAL methods (and their builds): quicker runs while tuning", ""},
