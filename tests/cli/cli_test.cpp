@@ -817,13 +817,32 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
   const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
                           " --samples 16 --noise 0 --threads 2");
   ASSERT_EQ(bake.code, 0) << bake.err;
-  const CliRun r =
-      run("eval " + path("box.obj").string() + " " + path("l.tpb").string() +
-          " --points 32 --samples 16 --grid both --gpu none --timing-size 32x18 --markdown --plot " +
-          path("p.svg").string() + " --report " + path("e.json").string());
+  const CliRun r = run("eval " + path("box.obj").string() + " " + path("l.tpb").string() +
+                       " --points 32 --samples 16 --grid both --grid-offsets 2 --gpu none --timing-size "
+                       "32x18 --markdown --plot " +
+                       path("p.svg").string() + " --report " + path("e.json").string());
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* name : {"| tet |", "| nearest |", "| grid (equal bytes) |", "| grid (probe count) |"})
+  for (const char* name : {"| tet |", "| nearest |", "| grid (equal bytes) |", "| grid (probe count) |",
+                           "| grid (equal bytes, offset 1/2) |"})
     EXPECT_NE(r.out.find(name), std::string::npos) << "no row " << name << " in\n" << r.out;
+  // The offset lattice has the equal-bytes grid's spacing and one node more per axis (the notes name both).
+  int dims[2][3] = {};
+  double step[2] = {0.0, 0.0};
+  const auto report = nlohmann::json::parse(slurp(path("e.json")));
+  for (const auto& note : report.at("grid_notes")) {
+    const std::string s = note.get<std::string>();
+    const int k = s.rfind("grid (equal bytes): ", 0) == 0               ? 0
+                  : s.rfind("grid (equal bytes, offset 1/2): ", 0) == 0 ? 1
+                                                                        : -1;
+    if (k >= 0)
+      EXPECT_EQ(std::sscanf(s.c_str() + s.find(": ") + 2, "%dx%dx%d nodes of %lf", &dims[k][0], &dims[k][1],
+                            &dims[k][2], &step[k]),
+                4)
+          << s;
+  }
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(dims[1][a], dims[0][a] + 1) << a;
+  EXPECT_GT(step[0], 0.0);
+  EXPECT_EQ(step[1], step[0]);
   const std::string svg = slurp(path("p.svg"));
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("grid (equal bytes)"), std::string::npos);

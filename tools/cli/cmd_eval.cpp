@@ -92,6 +92,7 @@ struct EvalSetup {
   const SceneTracer* tracer = nullptr;
   RenderMesh mesh;
   bool equalBytesGrid = true, probeCountGrid = true;
+  int gridOffsets = 1;                          // lattices of the equal-bytes grid: 1 = the centred one only
   std::shared_ptr<const LevelOcclusion> built;  // --occlusion for a level without stored occlusion
   int threads = 0;
 };
@@ -150,8 +151,20 @@ LevelUnderTest prepareLevel(std::shared_ptr<Level> level, const EvalSetup& setup
     out.notes.push_back(note.str());
     const uint64_t tetBytes = out.candidates[0].method.bytes;
     std::vector<std::pair<std::string, GridLayout>> layouts;
-    if (setup.equalBytesGrid)
-      layouts.emplace_back(kGridEqualBytes, gridLayoutForBytes(glm::dvec3(slo), glm::dvec3(shi), tetBytes));
+    if (setup.equalBytesGrid) {
+      const GridLayout centred = gridLayoutForBytes(glm::dvec3(slo), glm::dvec3(shi), tetBytes);
+      layouts.emplace_back(kGridEqualBytes, centred);
+      // The same spacing shifted by k/N of a step on every axis, one node more per axis to keep the box
+      // covered: where the nodes fall against walls changes the grid's error (docs/evaluation.md).
+      for (int k = 1; k < setup.gridOffsets; ++k) {
+        GridLayout shifted = centred;
+        shifted.min -= glm::dvec3(centred.step * double(k) / double(setup.gridOffsets));
+        shifted.dims += glm::ivec3(1);
+        layouts.emplace_back(
+            "grid (equal bytes, offset " + std::to_string(k) + "/" + std::to_string(setup.gridOffsets) + ")",
+            shifted);
+      }
+    }
     if (setup.probeCountGrid)
       layouts.emplace_back(kGridProbeCount,
                            gridLayoutForNodes(glm::dvec3(slo), glm::dvec3(shi), level->probes.size()));
@@ -336,6 +349,11 @@ int cmdEval(int argc, char** argv) {
        {"--grid", "", "both|equal-bytes|probe-count|none",
         "the regular SH grid competitor: at the tet level's total bytes, at its probe count, both or none",
         "both"},
+       {"--grid-offsets", "", "N",
+        "also bake the equal-bytes grid at N-1 more lattice offsets (shifted by k/N of its node spacing on "
+        "every axis, one node more per axis to cover the box): the spread of the grid's error with where its "
+        "nodes fall",
+        "1"},
        {"--timing-size", "", "WxH",
         "CPU timing: the hit pixels of the first camera at this size, in pixel order (coherent) and shuffled "
         "(random); scenes without cameras use the points in Morton order",
@@ -408,6 +426,8 @@ int cmdEval(int argc, char** argv) {
   setup.mesh = toRenderMesh(scene);
   setup.equalBytesGrid = gridArg == "both" || gridArg == "equal-bytes";
   setup.probeCountGrid = gridArg == "both" || gridArg == "probe-count";
+  setup.gridOffsets = args.integer("--grid-offsets");
+  if (setup.gridOffsets < 1 || setup.gridOffsets > 16) throw UsageError("--grid-offsets must be 1..16");
   setup.threads = opt.threads;
   if (occMode != OcclusionMode::kNone) {
     OcclusionOptions occOpt;
