@@ -733,7 +733,8 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
       uint o = tetraprobeOccPlaneOffset + 2u * (offset + k);
       int a = int(tetraprobeOccData[o]), b = int(tetraprobeOccData[o + 1u]);
       vec4 c = vec4(ivec4(bitfieldExtract(a, 0, 16), bitfieldExtract(a, 16, 16), bitfieldExtract(b, 0, 16),
-                          bitfieldExtract(b, 16, 16))) * 3.0518509447574615e-05;
+                          bitfieldExtract(b, 16, 16))) *
+               3.0518509447574615e-05;
       precise float d = c.x * w.x + c.y * w.y + c.z * w.z + c.w * w.w;
       s[k] = tetraprobeOccSmooth(-TETRAPROBE_OCC_PLANE_HALF, TETRAPROBE_OCC_PLANE_HALF, d);
     }
