@@ -362,10 +362,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
-      "  locate  %zu cells of %g m, BSP %zu nodes, %zu leaves (one tet each), depth max %d mean %.1f; "
+      "  locate  %zu cells of %g m, BSP %zu nodes, %zu leaves (at most %d tets each), depth max %d mean "
+      "%.1f; "
       "%zu bytes (%.1f per tet)\n",
-      gridCells, double(grid.cellSize), grid.nodes.size(), grid.leaves, grid.maxDepth, grid.meanDepth,
-      gridBytes, level.tets.empty() ? 0.0 : double(gridBytes) / double(level.tets.size()));
+      gridCells, double(grid.cellSize), grid.nodes.size(), grid.leaves, kDefaultLeafTets, grid.maxDepth,
+      grid.meanDepth, gridBytes, level.tets.empty() ? 0.0 : double(gridBytes) / double(level.tets.size()));
   std::printf("  bytes   %llu (probes %llu, SH %llu, tets %llu)\n", (unsigned long long)fileBytes,
               (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
   std::printf("  time   ");
