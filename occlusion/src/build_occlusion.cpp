@@ -254,8 +254,7 @@ bool makePlanes(Candidate& c, const std::vector<Cluster>& clusters, uint32_t cou
     for (int i = 0; i < 4; ++i) d[i] = glm::dot(clusters[k].normal, frame.p[i] - clusters[k].point);
     // Stored in snorm16, so the cells below see what loads; the zero plane: every probe on the cluster's plane.
     c.planes[k] = makeOcclusionPlane(d[0], d[1], d[2], d[3]);
-    const int16_t* q = c.planes[k].c;
-    if (q[0] == 0 && q[1] == 0 && q[2] == 0 && q[3] == 0) return false;
+    if (c.planes[k].isZero()) return false;
   }
   int votes[8][4][2] = {};
   for (const Sample& s : samples) {

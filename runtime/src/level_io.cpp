@@ -343,11 +343,9 @@ LevelResult validateLevel(const Level& level) {
       return corrupt("occlusion: " + std::to_string(occ.planes.size()) + " planes and " +
                      std::to_string(blocks) + " shadow-map blocks, the records use " +
                      std::to_string(planesUsed) + " and " + std::to_string(blocksUsed));
-    for (size_t k = 0; k < occ.planes.size(); ++k) {
-      const int16_t* c = occ.planes[k].c;
-      if (c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0)
+    for (size_t k = 0; k < occ.planes.size(); ++k)
+      if (occ.planes[k].isZero())
         return corrupt("occlusion: plane " + std::to_string(k) + " is zero (no plane)");
-    }
   }
   return {};
 }

@@ -842,16 +842,16 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
   int dims[2][3] = {};
   double step[2] = {0.0, 0.0};
   const auto report = nlohmann::json::parse(slurp(path("e.json")));
+  const std::string prefixes[2] = {"grid (equal bytes): ", "grid (equal bytes, offset 1/2): "};
   for (const auto& note : report.at("grid_notes")) {
     const std::string s = note.get<std::string>();
-    const int k = s.rfind("grid (equal bytes): ", 0) == 0               ? 0
-                  : s.rfind("grid (equal bytes, offset 1/2): ", 0) == 0 ? 1
-                                                                        : -1;
-    if (k < 0) continue;
-    EXPECT_EQ(std::sscanf(s.c_str() + s.find(": ") + 2, "%dx%dx%d nodes of %lf", &dims[k][0], &dims[k][1],
-                          &dims[k][2], &step[k]),
-              4)
-        << s;
+    for (int k = 0; k < 2; ++k)
+      if (s.rfind(prefixes[k], 0) == 0) {
+        EXPECT_EQ(std::sscanf(s.c_str() + prefixes[k].size(), "%dx%dx%d nodes of %lf", &dims[k][0],
+                              &dims[k][1], &dims[k][2], &step[k]),
+                  4)
+            << s;
+      }
   }
   for (int a = 0; a < 3; ++a) EXPECT_EQ(dims[1][a], dims[0][a] + 1) << a;
   EXPECT_GT(step[0], 0.0);

@@ -43,6 +43,8 @@ struct OcclusionPlane {
   int16_t c[4] = {0, 0, 0, 0};
 
   float value(int i) const { return float(c[i]) * kOcclusionPlaneUnit; }
+  // The zero plane: no plane (every probe on it); never stored.
+  bool isZero() const { return c[0] == 0 && c[1] == 0 && c[2] == 0 && c[3] == 0; }
   static constexpr float kOcclusionPlaneUnit = 1.0f / 32767.0f;
 };
 static_assert(sizeof(OcclusionPlane) == 8, "OcclusionPlane is a std430 uvec2");
