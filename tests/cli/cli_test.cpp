@@ -374,6 +374,67 @@ TEST_F(Cli, StreamedLevelAnswersLikeTheFullLevel) {
   EXPECT_GT(inside, points.size() / 2);
 }
 
+// A streamed level whose payload was edited and its CRC recomputed (so `open` accepts it) is still refused at
+// `load` where `loadLevel` would refuse it: here an all-zero occlusion plane (no plane at all; validateLevel's
+// last occlusion check), which only the sectors holding a tet that uses it read. Those sectors fail as
+// kCorrupt naming the plane, leave nothing loaded, and the others still load and answer.
+TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
+  write("big.scene.json",
+        std::string("{\"mesh\": \"") + TETRAPROBE_SOURCE_DIR +
+            "/samples/two_rooms/two_rooms.obj\", \"unit_scale\": 5, \"sky\": {\"radiance\": [0.2, "
+            "0.2, 0.2]}}");
+  ASSERT_EQ(run("bake " + path("big.scene.json").string() + " -o " + path("full.tpb").string() +
+                " --spacing 4 --max-spacing 16 --samples 8 --noise 0 --probe-budget 0 --fill-holes 0 "
+                "--occlusion planes --threads 2")
+                .code,
+            0);
+  const CliRun s = run("stream " + path("full.tpb").string() + " -o " + path("streamed.tpb").string());
+  ASSERT_EQ(s.code, 0) << s.err;
+  std::string b = slurp(path("streamed.tpb"));
+  auto u32 = [&b](size_t at) {
+    uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= uint32_t(uint8_t(b[at + size_t(i)])) << (8 * i);
+    return v;
+  };
+  size_t occl = 0;
+  for (uint32_t i = 0; i < u32(72); ++i)
+    if (std::memcmp(&b[80 + 24 * size_t(i)], "OCCL", 4) == 0) occl = u32(80 + 24 * size_t(i) + 8);
+  ASSERT_NE(occl, 0u);
+  const size_t tets = u32(occl), planes = u32(occl + 8);
+  ASSERT_GT(planes, 0u);
+  std::memset(&b[occl + 24 + 8 * tets], 0, 8);  // plane 0: all four coefficients zero
+  uint32_t crc = 0xFFFFFFFFu;                    // payload CRC-32 (IEEE) of [80, end - 4)
+  for (size_t i = 80; i + 4 < b.size(); ++i) {
+    crc ^= uint8_t(b[i]);
+    for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+  }
+  crc ^= 0xFFFFFFFFu;
+  for (int i = 0; i < 4; ++i) b[b.size() - 4 + size_t(i)] = char(uint8_t(crc >> (8 * i)));
+  std::ofstream(path("forged.tpb"), std::ios::binary).write(b.data(), std::streamsize(b.size()));
+
+  tetraprobe::Level whole;
+  EXPECT_EQ(tetraprobe::loadLevel(path("forged.tpb").string(), whole).status, tetraprobe::LevelStatus::kCorrupt);
+  tetraprobe::StreamingLevel st;
+  const tetraprobe::LevelResult opened = st.open(path("forged.tpb").string());
+  ASSERT_TRUE(opened) << opened.message;
+  const size_t idle = st.bytesInUse();
+  size_t refused = 0, loaded = 0;
+  for (const tetraprobe::SectorKey& key : st.sectors()) {
+    const tetraprobe::LevelResult r = st.load(key);
+    if (r) {
+      ++loaded;
+      st.unload(key);
+      continue;
+    }
+    ++refused;
+    EXPECT_EQ(r.status, tetraprobe::LevelStatus::kCorrupt) << r.message;
+    EXPECT_NE(r.message.find("is zero (no plane)"), std::string::npos) << r.message;
+    EXPECT_EQ(st.bytesInUse(), idle) << "a refused sector leaves nothing loaded";
+  }
+  EXPECT_GE(refused, 1u);
+  EXPECT_GE(loaded, 1u);
+}
+
 // The same input and options give a bit-identical level whatever the thread count, and the report has the
 // documented keys.
 TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
