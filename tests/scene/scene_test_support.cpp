@@ -20,10 +20,32 @@
 
 namespace tetraprobe::test {
 
+namespace {
+
+std::filesystem::path dirOf(const ::testing::TestInfo& info) {
+  return std::filesystem::temp_directory_path() /
+         (std::string("tetraprobe_scene_") + info.test_suite_name() + "_" + info.name());
+}
+
+// Removes a passed test's directory when the test ends; a failed test's stays for a look at its files.
+class RemoveDirOnPass : public ::testing::EmptyTestEventListener {
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    if (!info.result()->Failed()) {
+      std::error_code ignored;
+      std::filesystem::remove_all(dirOf(info), ignored);
+    }
+  }
+};
+
+}  // namespace
+
 std::filesystem::path freshDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string("tetraprobe_scene_") + info->test_suite_name() + "_" + info->name();
-  const auto dir = std::filesystem::temp_directory_path() / name;
+  static const bool listening = [] {
+    ::testing::UnitTest::GetInstance()->listeners().Append(new RemoveDirOnPass);  // gtest owns it
+    return true;
+  }();
+  (void)listening;
+  const auto dir = dirOf(*::testing::UnitTest::GetInstance()->current_test_info());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -13,7 +13,7 @@
 
 namespace tetraprobe::test {
 
-// Empty directory unique to the running test (removed and recreated).
+// Empty directory unique to the running test (removed and recreated); removed again when the test passes.
 std::filesystem::path freshDir();
 
 std::string writeText(const std::filesystem::path& file, const std::string& text);

@@ -46,7 +46,8 @@ for kind in level scene; do
   inputs=("$corpus" "$DIR/seeds/$kind")
   regressions=$ROOT/tests/${kind/level/runtime}/fuzz_regressions
   [ -d "$regressions" ] && inputs+=("$regressions")
-  if ! ASAN_OPTIONS=detect_leaks=1 "$DIR/bin/tetraprobe_fuzz_$kind" "${inputs[@]}" \
+  # TMPDIR: the scene harness writes its files in a folder of its own there, removed with $probe.
+  if ! TMPDIR=$probe ASAN_OPTIONS=detect_leaks=1 "$DIR/bin/tetraprobe_fuzz_$kind" "${inputs[@]}" \
       -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
       -artifact_prefix="$DIR/artifacts/$kind-" >"$log" 2>&1; then
     status=1
