@@ -403,7 +403,7 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
   const size_t tets = u32(occl), planes = u32(occl + 8);
   ASSERT_GT(planes, 0u);
   std::memset(&b[occl + 24 + 8 * tets], 0, 8);  // plane 0: all four coefficients zero
-  uint32_t crc = 0xFFFFFFFFu;                    // payload CRC-32 (IEEE) of [80, end - 4)
+  uint32_t crc = 0xFFFFFFFFu;                   // payload CRC-32 (IEEE) of [80, end - 4)
   for (size_t i = 80; i + 4 < b.size(); ++i) {
     crc ^= uint8_t(b[i]);
     for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
@@ -413,7 +413,8 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
   std::ofstream(path("forged.tpb"), std::ios::binary).write(b.data(), std::streamsize(b.size()));
 
   tetraprobe::Level whole;
-  EXPECT_EQ(tetraprobe::loadLevel(path("forged.tpb").string(), whole).status, tetraprobe::LevelStatus::kCorrupt);
+  EXPECT_EQ(tetraprobe::loadLevel(path("forged.tpb").string(), whole).status,
+            tetraprobe::LevelStatus::kCorrupt);
   tetraprobe::StreamingLevel st;
   const tetraprobe::LevelResult opened = st.open(path("forged.tpb").string());
   ASSERT_TRUE(opened) << opened.message;
