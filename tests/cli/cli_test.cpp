@@ -723,12 +723,27 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
   const std::string common = path("wall.obj").string() + " --placement none --probes " +
                              path("probes.csv").string() +
                              " --occlusion shadow-maps --samples 512 --noise 0 --probe-budget 0 --threads 2";
-  ASSERT_EQ(run("bake " + common + " --fill-holes 0 -o " + path("before.tpb").string()).code, 0);
-  const CliRun after = run("bake " + common + " -o " + path("after.tpb").string());
+  ASSERT_EQ(run("bake " + common + " --fill-holes 0 -o " + path("before.tpb").string() + " --report " +
+                path("before.json").string())
+                .code,
+            0);
+  const CliRun after = run("bake " + common + " -o " + path("after.tpb").string() + " --report " +
+                           path("after.json").string());
   ASSERT_EQ(after.code, 0) << after.err;
   const size_t plus = after.out.find('+', after.out.find("holes"));
   ASSERT_NE(plus, std::string::npos) << after.out;
   EXPECT_NE(after.out[plus + 1], '0') << "the first round must add probes: " << after.out;
+  // The report's check of the finished level (a draw of surface points of its own): without filling some
+  // surfaces fall back, and filling leaves fewer of them.
+  const auto holesBefore = nlohmann::json::parse(slurp(path("before.json"))).at("holes");
+  const auto holesAfter = nlohmann::json::parse(slurp(path("after.json"))).at("holes");
+  const auto left = [](const nlohmann::json& h) { return h.at("final_hole_points").get<int64_t>(); };
+  EXPECT_GT(holesBefore.at("final_points_checked").get<int64_t>(), 0);
+  EXPECT_EQ(holesAfter.at("final_points_checked"), holesBefore.at("final_points_checked"));
+  EXPECT_GT(left(holesBefore), 0);
+  EXPECT_LT(left(holesAfter), left(holesBefore))
+      << "hole filling leaves fewer surfaces falling back: " << holesBefore << " -> " << holesAfter;
+  EXPECT_NE(after.out.find("fallback "), std::string::npos) << after.out;
 
   auto lum = [](const std::string& line) {
     double r = 0, g = 0, b = 0;

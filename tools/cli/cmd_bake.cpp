@@ -359,6 +359,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       std::printf(" [%zu of %zu points see no probe: +%zu probes]", r.holes, r.checked, r.added);
     std::printf("\n");
   }
+  if (stats.finalChecked > 0)
+    std::printf(
+        "  fallback %zu of %zu surface points (%.1f %%) see none of their tet's probes in the finished "
+        "level\n",
+        stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked));
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
@@ -453,7 +458,10 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     nlohmann::json rounds = nlohmann::json::array();
     for (const auto& r : stats.holeRounds)
       rounds.push_back({{"points_checked", r.checked}, {"hole_points", r.holes}, {"probes_added", r.added}});
-    j["holes"] = {{"rounds", rounds}, {"probes_added", stats.holeProbes}};
+    j["holes"] = {{"rounds", rounds},
+                  {"probes_added", stats.holeProbes},
+                  {"final_points_checked", stats.finalChecked},
+                  {"final_hole_points", stats.finalHoles}};
     j["refine"] = {{"probes_added", stats.refineProbes},
                    {"points", stats.refineBefore.points},
                    {"mean_log2_error_before", stats.refineBefore.meanLogError},

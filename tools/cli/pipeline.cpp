@@ -393,6 +393,18 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     timer.mark("refine");
   }
 
+  // What the user gets: the surface points of the finished level (after hole filling and refinement, which
+  // both re-tetrahedralize) that still see none of their tet's probes, on a draw of their own. Reported only.
+  if (!level.occlusion.empty()) {
+    OcclusionHoleOptions ho;
+    ho.spacing = options.spacing;
+    ho.seed = options.bake.seed ^ 0xf1a1ull;
+    const OcclusionHoles left = findOcclusionHoles(tracer, level, ho);
+    stats.finalChecked = left.pointsChecked;
+    stats.finalHoles = left.holePoints;
+    timer.mark("check");
+  }
+
   if (kinds.size() == level.probes.size()) level.probeKinds = std::move(kinds);
 
   std::ostringstream gen;
