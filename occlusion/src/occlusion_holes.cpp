@@ -16,8 +16,10 @@
 
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
 
@@ -112,6 +114,48 @@ float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const 
   return fallback;
 }
 
+namespace {
+
+// Whether the fallback at the point answers with the light of a probe the point sees: the probe it leans on
+// (the largest of u_i max(front_i, kOcclusionBehindShare), as occludedIrradiance weighs them) lies in front,
+// a ray reaches it, and the unoccluded blend capping the fallback is not darker in any channel.
+bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const ProbeQuery& query,
+                       const glm::dvec3& point, const glm::vec3& normal) {
+  const Location loc = query.locate(point);
+  if (loc.tet < 0) return false;
+  const Tet& t = level.tets[size_t(loc.tet)];
+  const glm::vec3 local(point - level.origin);
+  glm::vec3 toProbe[4];
+  for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
+  const glm::vec4 front = probeFront(toProbe, normal);
+  int best = 0;
+  float bestQ = -1.0f;
+  for (int i = 0; i < 4; ++i) {
+    const float q = std::max(loc.weights[i], 0.0f) * std::max(front[i], kOcclusionBehindShare);
+    if (q > bestQ) {
+      bestQ = q;
+      best = i;
+    }
+  }
+  if (!(front[best] > 0.5f)) return false;
+  // The fallback is min(that probe, the unoccluded blend) per channel: where the blend (which may hold probes
+  // behind a wall) is the darker, the answer is not the seen probe's light.
+  const glm::vec3 own = shIrradiance(level.sh[size_t(t.v[best])], normal);
+  const glm::vec4 u = applyOcclusion(loc.weights, glm::vec4(1.0f));
+  const ShRgb* sh[4];
+  for (int i = 0; i < 4; ++i) sh[i] = &level.sh[size_t(t.v[i])];
+  const float uf[4] = {u.x, u.y, u.z, u.w};
+  const glm::vec3 blend = shIrradiance(shBlend(sh, uf, 4), normal);
+  if (!(own.x <= blend.x && own.y <= blend.y && own.z <= blend.z)) return false;
+  const glm::vec3 n = glm::normalize(normal);
+  const glm::vec3 origin = glm::vec3(point) + n * tracer.rayEpsilon();
+  const glm::vec3 d = glm::vec3(glm::dvec3(level.probes[size_t(t.v[best])]) + level.origin) - origin;
+  const float dist = glm::length(d);
+  return dist > 0.0f && !tracer.occluded(origin, d / dist, 0.0f, dist, kOcclusionWallTransmission);
+}
+
+}  // namespace
+
 OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
                                   const OcclusionHoleOptions& options) {
   if (!(options.spacing > 0.0) || !std::isfinite(options.spacing))
@@ -130,6 +174,10 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   for (const SurfacePoint& sp : points) {
     if (!(occlusionFallbackShare(level, query, sp.position, sp.normal) > 0.0f)) continue;
     ++out.holePoints;
+    if (options.onlyUnseen && fallbackProbeSeen(tracer, level, query, sp.position, sp.normal)) {
+      ++out.seenPoints;
+      continue;
+    }
     proposals.propose(sp.position, sp.normal);
   }
   out.probes = proposals.probes();

@@ -770,6 +770,22 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
   EXPECT_GT(lum(filled.out), 0.5 * ownRef) << filled.out;
   EXPECT_LT(lum(filled.out), 2.0 * ownRef) << filled.out;
   EXPECT_LT(lum(filled.out), farRef / 3.0) << filled.out;
+
+  // --hole-rule unseen leaves alone only hole points whose fallback probe a ray reaches; this point's (the
+  // right room's probe beyond the panel) is hidden, so it still gets its probe and its own side's light.
+  ASSERT_EQ(run("bake " + common + " --hole-rule unseen -o " + path("unseen.tpb").string() + " --report " +
+                path("unseen.json").string())
+                .code,
+            0);
+  const auto rounds = nlohmann::json::parse(slurp(path("unseen.json"))).at("holes").at("rounds");
+  ASSERT_FALSE(rounds.empty());
+  EXPECT_GT(rounds[0].at("probes_added").get<int64_t>(), 0);
+  EXPECT_LT(rounds[0].at("fallback_probe_seen").get<int64_t>(), rounds[0].at("hole_points").get<int64_t>());
+  const CliRun unseen = run("query " + path("unseen.tpb").string() + " 0.05 2 0 1 0 0");
+  ASSERT_EQ(unseen.code, 0);
+  EXPECT_GT(lum(unseen.out), 0.5 * ownRef) << unseen.out;
+  EXPECT_LT(lum(unseen.out), 2.0 * ownRef) << unseen.out;
+  EXPECT_NE(run("bake " + common + " --hole-rule some -o " + path("x.tpb").string()).code, 0);
 }
 
 // render --mode reference / error: traced on the CPU (no Vulkan needed), the error mode prints the gross

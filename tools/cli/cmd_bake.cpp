@@ -79,6 +79,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         "front of them, then tetrahedralize, bake and occlude again; stops early when none are left (0 = "
         "none)",
         "3"},
+       {"--hole-rule", "", "all|unseen",
+        "which hole points get a probe: all of them, or only those whose fallback does not already answer "
+        "with a probe they see (reached by a ray, not darker than the blend capping the fallback): fewer "
+        "probes, smaller levels and shorter bakes, accuracy mixed (docs/accuracy.md)",
+        "all"},
        {"--probe-budget", "", "N|auto",
         "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
         "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
@@ -178,6 +183,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                      args.str("--occlusion") + "'");
   opt.occlusion.minAgreement = args.number("--min-agreement");
   opt.holeRounds = args.integer("--fill-holes");
+  if (args.str("--hole-rule") != "all" && args.str("--hole-rule") != "unseen")
+    throw UsageError("--hole-rule must be all or unseen, not '" + args.str("--hole-rule") + "'");
+  opt.holesOnlyUnseen = args.str("--hole-rule") == "unseen";
   opt.probeBudget = args.str("--probe-budget") == "auto" ? -1 : args.integer("--probe-budget");
   opt.refinePoints = args.integer("--refine-points");
   if (opt.probeBudget < -1) throw UsageError("--probe-budget must be auto or >= 0");
@@ -356,7 +364,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (!stats.holeRounds.empty()) {
     std::printf("  holes  ");
     for (const auto& r : stats.holeRounds)
-      std::printf(" [%zu of %zu points see no probe: +%zu probes]", r.holes, r.checked, r.added);
+      if (opt.holesOnlyUnseen)
+        std::printf(
+            " [%zu of %zu points see no probe, %zu of them their fallback probe by rays: +%zu probes]",
+            r.holes, r.checked, r.seen, r.added);
+      else
+        std::printf(" [%zu of %zu points see no probe: +%zu probes]", r.holes, r.checked, r.added);
     std::printf("\n");
   }
   if (stats.finalChecked > 0)
@@ -405,6 +418,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                     {"occlusion", occlusionModeName(opt.occlusion.mode)},
                     {"min_agreement", opt.occlusion.minAgreement},
                     {"fill_holes", opt.holeRounds},
+                    {"hole_rule", opt.holesOnlyUnseen ? "unseen" : "all"},
                     {"probe_budget", opt.probeBudget},
                     {"refine_points", opt.refinePoints}};
     j["probes"] = {{"count", level.probes.size()},
@@ -457,7 +471,10 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                       {"blackouts", stats.occlusion.blackouts}};
     nlohmann::json rounds = nlohmann::json::array();
     for (const auto& r : stats.holeRounds)
-      rounds.push_back({{"points_checked", r.checked}, {"hole_points", r.holes}, {"probes_added", r.added}});
+      rounds.push_back({{"points_checked", r.checked},
+                        {"hole_points", r.holes},
+                        {"fallback_probe_seen", r.seen},
+                        {"probes_added", r.added}});
     j["holes"] = {{"rounds", rounds},
                   {"probes_added", stats.holeProbes},
                   {"final_points_checked", stats.finalChecked},

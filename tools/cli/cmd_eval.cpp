@@ -315,6 +315,7 @@ PipelineOptions sweepOptions(const Level& level, double spacing, int threads) {
     if (key == "occlusion") parseOcclusionMode(value, opt.occlusion.mode);
     if (key == "min_agreement") opt.occlusion.minAgreement = std::atof(value.c_str());
     if (key == "hole_rounds") opt.holeRounds = std::atoi(value.c_str());
+    if (key == "hole_rule") opt.holesOnlyUnseen = value == "unseen";
     if (key == "tetra" && (value == "cgal" || value == "tetgen")) opt.tetra = value;
   }
   return opt;

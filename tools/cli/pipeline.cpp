@@ -356,8 +356,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       OcclusionHoleOptions ho;
       ho.spacing = options.spacing;
       ho.seed = options.bake.seed ^ (0x401e5ull + uint64_t(round));
+      ho.onlyUnseen = options.holesOnlyUnseen;
       const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
-      stats.holeRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size()});
+      stats.holeRounds.push_back(
+          {holes.pointsChecked, holes.holePoints, holes.probes.size(), holes.seenPoints});
       if (holes.probes.empty()) break;
       stats.holeProbes += holes.probes.size();
       addProbes(holes.probes, 0xb01e5ull + uint64_t(round), LevelProbeKind::kHole);
@@ -423,6 +425,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
       << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)
       << "; occlusion=" << occlusionModeName(options.occlusion.mode)
       << "; hole_rounds=" << options.holeRounds;
+  if (options.holesOnlyUnseen) gen << "; hole_rule=unseen";
   if (options.occlusion.mode == OcclusionMode::kAuto)
     gen << "; min_agreement=" << options.occlusion.minAgreement;
   level.generator = gen.str();

@@ -39,6 +39,7 @@ struct PipelineOptions {
   // that see none of their tet's probes get a probe in front of them, then the level is tetrahedralized,
   // baked (new probes only) and occluded again. 0 = none; needs occlusion. Not for imported SH.
   int holeRounds = 1;
+  bool holesOnlyUnseen = false;  // OcclusionHoleOptions::onlyUnseen (--hole-rule unseen)
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
   // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 = 10 %
   // of the probes that are not shell probes.
@@ -84,6 +85,7 @@ struct PipelineStats {
   // added; and after the last round, the points still falling back (measured on a fresh draw).
   struct HoleRound {
     size_t checked = 0, holes = 0, added = 0;
+    size_t seen = 0;  // --hole-rule unseen: hole points left alone (their fallback probe seen by rays)
   };
   std::vector<HoleRound> holeRounds;
   size_t holeProbes = 0;

@@ -24,11 +24,17 @@ struct OcclusionHoleOptions {
   double pointsPerSquareMetre = 4.0;  // surface points checked, per m^2 of surface x (1 m / spacing)^2
   int minPoints = 4096, maxPoints = 50000;
   uint64_t seed = 0x401e5ull;  // surface points (sampleSurfacePoints)
+  // Propose only for hole points whose fallback does not already answer with a probe they see: skipped are
+  // points whose fallback probe (the one occludedIrradiance leans on: the largest u_i max(front_i,
+  // kOcclusionBehindShare)) lies in front, is reached by a ray, and is in no channel brighter than the
+  // unoccluded blend that caps the fallback (the bake's --hole-rule unseen; docs/accuracy.md has the trade).
+  bool onlyUnseen = false;
 };
 
 struct OcclusionHoles {
   size_t pointsChecked = 0;  // surface points drawn (on their open side)
   size_t holePoints = 0;     // of those, points that see none of their tet's probes (fallback share > 0)
+  size_t seenPoints = 0;     // of those, with onlyUnseen: points left alone, their fallback probe seen
   std::vector<glm::dvec3> probes;  // new probe positions, world metres, deterministic order
 };
 
