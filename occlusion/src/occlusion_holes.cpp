@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -103,45 +104,38 @@ bool ProbesInFront::propose(const glm::dvec3& point, const glm::vec3& normal) {
   return true;
 }
 
-float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
-                             const glm::vec3& normal) {
-  if (level.occlusion.empty()) return 0.0f;
-  const Location loc = query.locate(point);
-  if (loc.tet < 0) return 0.0f;
+namespace {
+
+// occlusionFallbackShare at a point already located.
+float fallbackShareAt(const Level& level, const Location& loc, const glm::dvec3& point,
+                      const glm::vec3& normal) {
+  if (level.occlusion.empty() || loc.tet < 0) return 0.0f;
   float fallback = 0.0f;
   const glm::vec3 local(point - level.origin);
   applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, normal), &fallback);
   return fallback;
 }
 
-namespace {
-
 // Whether the fallback at the point answers with the light of a probe the point sees: the probe it leans on
 // (the largest of u_i max(front_i, kOcclusionBehindShare), as occludedIrradiance weighs them) lies in front,
 // a ray reaches it, and the unoccluded blend capping the fallback is not darker in any channel.
-bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const ProbeQuery& query,
+bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const Location& loc,
                        const glm::dvec3& point, const glm::vec3& normal) {
-  const Location loc = query.locate(point);
   if (loc.tet < 0) return false;
   const Tet& t = level.tets[size_t(loc.tet)];
   const glm::vec3 local(point - level.origin);
   glm::vec3 toProbe[4];
   for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
   const glm::vec4 front = probeFront(toProbe, normal);
+  const glm::vec4 u = applyOcclusion(loc.weights, glm::vec4(1.0f));
+  const glm::vec4 lean = fallbackLean(u, front);
   int best = 0;
-  float bestQ = -1.0f;
-  for (int i = 0; i < 4; ++i) {
-    const float q = std::max(loc.weights[i], 0.0f) * std::max(front[i], kOcclusionBehindShare);
-    if (q > bestQ) {
-      bestQ = q;
-      best = i;
-    }
-  }
+  for (int i = 1; i < 4; ++i)
+    if (lean[i] > lean[best]) best = i;
   if (!(front[best] > 0.5f)) return false;
   // The fallback is min(that probe, the unoccluded blend) per channel: where the blend (which may hold probes
   // behind a wall) is the darker, the answer is not the seen probe's light.
   const glm::vec3 own = shIrradiance(level.sh[size_t(t.v[best])], normal);
-  const glm::vec4 u = applyOcclusion(loc.weights, glm::vec4(1.0f));
   const ShRgb* sh[4];
   for (int i = 0; i < 4; ++i) sh[i] = &level.sh[size_t(t.v[i])];
   const float uf[4] = {u.x, u.y, u.z, u.w};
@@ -156,6 +150,12 @@ bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const Prob
 
 }  // namespace
 
+float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
+                             const glm::vec3& normal) {
+  if (level.occlusion.empty()) return 0.0f;
+  return fallbackShareAt(level, query.locate(point), point, normal);
+}
+
 OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
                                   const OcclusionHoleOptions& options) {
   if (!(options.spacing > 0.0) || !std::isfinite(options.spacing))
@@ -169,18 +169,20 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   out.pointsChecked = points.size();
 
   const ProbeQuery query(level);
-  ProbesInFront proposals(tracer, level, options.spacing);
+  std::optional<ProbesInFront> proposals;
+  if (options.propose) proposals.emplace(tracer, level, options.spacing);
   FlushDenormalsScope ftz;
   for (const SurfacePoint& sp : points) {
-    if (!(occlusionFallbackShare(level, query, sp.position, sp.normal) > 0.0f)) continue;
+    const Location loc = query.locate(sp.position);
+    if (!(fallbackShareAt(level, loc, sp.position, sp.normal) > 0.0f)) continue;
     ++out.holePoints;
-    if (options.onlyUnseen && fallbackProbeSeen(tracer, level, query, sp.position, sp.normal)) {
+    if (options.onlyUnseen && fallbackProbeSeen(tracer, level, loc, sp.position, sp.normal)) {
       ++out.seenPoints;
       continue;
     }
-    proposals.propose(sp.position, sp.normal);
+    if (proposals) proposals->propose(sp.position, sp.normal);
   }
-  out.probes = proposals.probes();
+  if (proposals) out.probes = proposals->probes();
   return out;
 }
 

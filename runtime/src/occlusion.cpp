@@ -240,7 +240,7 @@ glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weig
   // The unoccluded weights u, and their 8th powers renormalized: a blend dominated by the nearest probe
   // (the largest weight) in front of the surface, continuous where two weights tie.
   const glm::vec4 u = applyOcclusion(weights, glm::vec4(1.0f));
-  const glm::vec4 q = u * glm::max(front, glm::vec4(kOcclusionBehindShare));
+  const glm::vec4 q = fallbackLean(u, front);
   glm::vec4 p = q * q;
   p = p * p;
   p = p * p;

@@ -401,6 +401,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     OcclusionHoleOptions ho;
     ho.spacing = options.spacing;
     ho.seed = options.bake.seed ^ 0xf1a1ull;
+    ho.propose = false;
     const OcclusionHoles left = findOcclusionHoles(tracer, level, ho);
     stats.finalChecked = left.pointsChecked;
     stats.finalHoles = left.holePoints;

@@ -29,6 +29,7 @@ struct OcclusionHoleOptions {
   // kOcclusionBehindShare)) lies in front, is reached by a ray, and is in no channel brighter than the
   // unoccluded blend that caps the fallback (the bake's --hole-rule unseen; docs/accuracy.md has the trade).
   bool onlyUnseen = false;
+  bool propose = true;  // false: count the hole points only (the bake's check of the finished level)
 };
 
 struct OcclusionHoles {

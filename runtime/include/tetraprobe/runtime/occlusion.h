@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -108,6 +109,11 @@ glm::vec4 probeFront(const glm::vec3 toProbe[4], const glm::vec3& normal);
 // keeps an enclosed point next to one bright probe from taking all of it. Continuous in the weights, the
 // visibility, the front factors and the normal. `probes[i]` is tet.v[i]'s SH; `front` from probeFront.
 inline constexpr float kOcclusionBehindShare = 1e-3f;
+// q above: how much the fallback leans on each probe (`unoccluded` = u, `front` from probeFront). The bake's
+// hole rule (occlusion_holes.h) reads the largest as the probe the fallback answers with.
+inline glm::vec4 fallbackLean(const glm::vec4& unoccluded, const glm::vec4& front) {
+  return unoccluded * glm::max(front, glm::vec4(kOcclusionBehindShare));
+}
 glm::vec3 occludedIrradiance(const ShRgb* const probes[4], const glm::vec4& weights,
                              const glm::vec4& visibility, const glm::vec3& normal, const glm::vec4& front);
 
