@@ -18,6 +18,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "level_bytes.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/streaming.h"
@@ -390,27 +391,16 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
             0);
   const CliRun s = run("stream " + path("full.tpb").string() + " -o " + path("streamed.tpb").string());
   ASSERT_EQ(s.code, 0) << s.err;
-  std::string b = slurp(path("streamed.tpb"));
-  auto u32 = [&b](size_t at) {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= uint32_t(uint8_t(b[at + size_t(i)])) << (8 * i);
-    return v;
-  };
-  size_t occl = 0;
-  for (uint32_t i = 0; i < u32(72); ++i)
-    if (std::memcmp(&b[80 + 24 * size_t(i)], "OCCL", 4) == 0) occl = u32(80 + 24 * size_t(i) + 8);
+  const std::string streamed = slurp(path("streamed.tpb"));
+  tetraprobe::test::Bytes b(streamed.begin(), streamed.end());
+  const size_t occl = tetraprobe::test::section(b, "OCCL");
   ASSERT_NE(occl, 0u);
-  const size_t tets = u32(occl), planes = u32(occl + 8);
+  const uint64_t tets = tetraprobe::test::getU64(b, occl), planes = tetraprobe::test::getU64(b, occl + 8);
   ASSERT_GT(planes, 0u);
   std::memset(&b[occl + 24 + 8 * tets], 0, 8);  // plane 0: all four coefficients zero
-  uint32_t crc = 0xFFFFFFFFu;                   // payload CRC-32 (IEEE) of [80, end - 4)
-  for (size_t i = 80; i + 4 < b.size(); ++i) {
-    crc ^= uint8_t(b[i]);
-    for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
-  }
-  crc ^= 0xFFFFFFFFu;
-  for (int i = 0; i < 4; ++i) b[b.size() - 4 + size_t(i)] = char(uint8_t(crc >> (8 * i)));
-  std::ofstream(path("forged.tpb"), std::ios::binary).write(b.data(), std::streamsize(b.size()));
+  tetraprobe::test::fixChecksums(b);
+  std::ofstream(path("forged.tpb"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
 
   tetraprobe::Level whole;
   EXPECT_EQ(tetraprobe::loadLevel(path("forged.tpb").string(), whole).status,
