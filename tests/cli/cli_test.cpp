@@ -18,6 +18,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "image_compare.h"
 #include "level_bytes.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
@@ -947,6 +948,27 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
        {"\"cpu_ns_per_query\"", "\"cpu_ns_per_query_coherent\"", "\"cpu_ns_per_query_random\"", "\"threads\"",
         "\"gpu_ms\"", "\"bytes_sections\"", "\"cell_grid\"", "\"outer_cells\"", "\"bytes_per_probe\""})
     EXPECT_NE(json.find(key), std::string::npos) << "no key " << key;
+}
+
+// --plot FILE.png writes the same chart as a PNG (1840 pixels wide: 2 per SVG unit) that reads back; a name
+// ending in neither .svg nor .png is refused before any work (exit 2, naming the file), writing nothing.
+TEST_F(Cli, EvalPlotsPngByTheNamesEndingAndRefusesOtherNames) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
+                          " --samples 16 --noise 0 --threads 2");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  const std::string base = "eval " + path("box.obj").string() + " " + path("l.tpb").string() +
+                           " --points 16 --samples 8 --grid none --gpu none --timing-size 16x9 --plot ";
+  const CliRun png = run(base + path("p.PNG").string());
+  ASSERT_EQ(png.code, 0) << png.err;
+  const tetraprobe::cli::Rgb8Image im = tetraprobe::cli::readImage8(path("p.PNG").string());
+  EXPECT_EQ(im.width, 1840);
+  EXPECT_GT(im.height, 600);
+  const CliRun bad = run(base + path("p.txt").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("p.txt"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("p.txt")));
 }
 
 // --reference-in scores against the references an earlier --points-out wrote: the same figures as the run that

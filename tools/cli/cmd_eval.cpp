@@ -1,6 +1,7 @@
 // `tetraprobe eval SCENE LEVEL.tpb`: probe lookup error against path-traced ground truth, with memory and
 // run time, side by side with the regular SH grid a user would pick instead (eval/grid_volume.h).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +15,7 @@
 #include "args.h"
 #include "commands.h"
 #include "eval_plot.h"
+#include "image_compare.h"
 #include "pipeline.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
@@ -281,6 +283,20 @@ std::string markdownTable(const EvalReport& report) {
   return md.str();
 }
 
+// Whether --plot FILE asks for a PNG (else SVG); a name ending in neither is a usage error.
+bool plotIsPng(const std::string& file) {
+  auto endsWith = [&](const char* tail) {
+    const std::string t = tail;
+    if (file.size() < t.size()) return false;
+    for (size_t i = 0; i < t.size(); ++i)
+      if (std::tolower(static_cast<unsigned char>(file[file.size() - t.size() + i])) != t[i]) return false;
+    return true;
+  };
+  if (endsWith(".png")) return true;
+  if (endsWith(".svg")) return false;
+  throw UsageError("--plot FILE must end in .svg or .png, not '" + file + "'");
+}
+
 // "spacing=0.25,0.5,1,2" -> the spacings.
 std::vector<double> parseSweep(const std::string& text) {
   const std::string prefix = "spacing=";
@@ -364,7 +380,10 @@ int cmdEval(int argc, char** argv) {
         "or a view of the scene's box); none = skip",
         "auto"},
        {"--markdown", "", "", "print each point set's table as Markdown", ""},
-       {"--plot", "", "FILE.svg", "write error against bytes and against GPU ms (or CPU ns) as SVG", ""},
+       {"--plot", "", "FILE.svg|FILE.png",
+        "write error against bytes and against GPU ms (or CPU ns) as an SVG or PNG chart (by the name's "
+        "ending)",
+        ""},
        {"--sweep", "", "spacing=S1,S2,...",
         "re-bake the scene at these spacings (the bake pipeline with the level's settings), score every "
         "method on the same points and draw each method's curve with the Pareto front",
@@ -400,6 +419,7 @@ int cmdEval(int argc, char** argv) {
   if (gpuArg != "auto" && gpuArg != "none") throw UsageError("--gpu must be auto or none");
   const std::vector<double> sweep =
       args.has("--sweep") ? parseSweep(args.str("--sweep")) : std::vector<double>{};
+  if (args.has("--plot")) plotIsPng(args.str("--plot"));  // refuse a bad name before the work
 
   const Scene scene = loadScene(args.positional()[0]);
   auto level = std::make_shared<Level>();
@@ -621,9 +641,13 @@ int cmdEval(int argc, char** argv) {
         for (const MethodResult& m : row.report.methods) add(m, label);
       }
     }
-    std::string error;
-    if (!writeFileAtomic(args.str("--plot"), evalPlotSvg(points, po), &error))
-      throw std::runtime_error(error);
+    const std::string plot = args.str("--plot");
+    if (plotIsPng(plot)) {
+      writeImage8(plot, evalPlotImage(points, po));
+    } else {
+      std::string error;
+      if (!writeFileAtomic(plot, evalPlotSvg(points, po), &error)) throw std::runtime_error(error);
+    }
   }
 
   if (args.has("--points-out")) {

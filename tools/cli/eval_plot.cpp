@@ -1,11 +1,13 @@
-// Two-panel SVG of error against bytes and against run time (tetraprobe eval --plot). Contract: eval_plot.h.
+// Two-panel chart of error against bytes and against run time (tetraprobe eval --plot), drawn once on a
+// PlotCanvas and written as SVG or PNG. Contract: eval_plot.h.
 #include "eval_plot.h"
+
+#include "plot_canvas.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <sstream>
 
 namespace tetraprobe::cli {
 
@@ -24,27 +26,6 @@ std::string colorOf(const std::string& method, size_t index) {
   static const char* spare[] = {"#a6761d", "#666666", "#1f78b4", "#b2df8a"};
   const auto it = known.find(method);
   return it != known.end() ? it->second : spare[index % 4];
-}
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '&')
-      out += "&amp;";
-    else if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else
-      out += c;
-  }
-  return out;
-}
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f", v);
-  return buf;
 }
 
 std::string tickLabel(double v, bool bytes) {
@@ -82,7 +63,15 @@ std::vector<size_t> paretoFront(const std::vector<double>& x, const std::vector<
   return front;
 }
 
-void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool bytesAxis, double ox,
+// Plot size in user units for `methods` series (the legend takes a row per four methods).
+double plotWidth() {
+  return 2 * kPanelW;
+}
+double plotHeight(size_t methods) {
+  return kPanelH + kLegendH * double((methods + 3) / 4) + 24;
+}
+
+void panel(PlotCanvas& cv, const std::vector<PlotPoint>& points, bool bytesAxis, double ox,
            const std::string& xTitle, const PlotOptions& options, const std::vector<std::string>& methods) {
   std::vector<double> xs;
   for (const PlotPoint& p : points) xs.push_back(bytesAxis ? p.bytes : p.time);
@@ -95,16 +84,12 @@ void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool b
   }
   const double x0 = ox + kMarginL, y0 = kMarginT, w = kPanelW - kMarginL - kMarginR,
                h = kPanelH - kMarginT - kMarginB;
-  svg << "<rect x='" << num(x0) << "' y='" << num(y0) << "' width='" << num(w) << "' height='" << num(h)
-      << "' fill='white' stroke='#444'/>\n";
-  svg << "<text x='" << num(x0 + w / 2) << "' y='" << num(y0 + h + 40) << "' text-anchor='middle'>"
-      << escape(xTitle) << "</text>\n";
-  svg << "<text x='" << num(ox + 16) << "' y='" << num(y0 + h / 2)
-      << "' text-anchor='middle' transform='rotate(-90 " << num(ox + 16) << " " << num(y0 + h / 2)
-      << ")'>error</text>\n";
+  cv.rect(x0, y0, w, h, "white", "none", 0.0);  // the frame's stroke is drawn over the grid lines, below
+  cv.text(x0 + w / 2, y0 + h + 40, xTitle, TextAnchor::kMiddle, 12);
+  cv.text(ox + 16, y0 + h / 2, "error", TextAnchor::kMiddle, 12, "#000000", true);
   if (!(xmax > 0.0)) {
-    svg << "<text x='" << num(x0 + w / 2) << "' y='" << num(y0 + h / 2)
-        << "' text-anchor='middle' fill='#888'>not measured</text>\n";
+    cv.rect(x0, y0, w, h, "none", "#444", 1.0);
+    cv.text(x0 + w / 2, y0 + h / 2, "not measured", TextAnchor::kMiddle, 12, "#888");
     return;
   }
   // Log x padded by a fifth of a decade each side (at least one decade in all); ticks at 1, 2, 5 x 10^d.
@@ -123,18 +108,16 @@ void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool b
     for (const double m : {1.0, 2.0, 5.0}) {
       const double v = m * std::pow(10.0, d);
       if (std::log10(v) < lx0 || std::log10(v) > lx1) continue;
-      svg << "<line x1='" << num(X(v)) << "' y1='" << num(y0) << "' x2='" << num(X(v)) << "' y2='"
-          << num(y0 + h) << "' stroke='" << (m == 1.0 ? "#ccc" : "#eee") << "'/>\n<text x='" << num(X(v))
-          << "' y='" << num(y0 + h + 16) << "' text-anchor='middle' font-size='11'>"
-          << tickLabel(v, bytesAxis) << "</text>\n";
+      cv.polyline({X(v), y0, X(v), y0 + h}, m == 1.0 ? "#ccc" : "#eee", 1.0);
+      cv.text(X(v), y0 + h + 16, tickLabel(v, bytesAxis), TextAnchor::kMiddle, 11);
     }
   for (double v = 0.0; v <= ymax + 1e-9; v += ystep) {
     char buf[16];
     std::snprintf(buf, sizeof buf, "%g", std::round(v * 1000.0) / 1000.0);
-    svg << "<line x1='" << num(x0) << "' y1='" << num(Y(v)) << "' x2='" << num(x0 + w) << "' y2='"
-        << num(Y(v)) << "' stroke='#eee'/>\n<text x='" << num(x0 - 6) << "' y='" << num(Y(v) + 4)
-        << "' text-anchor='end' font-size='11'>" << buf << "</text>\n";
+    cv.polyline({x0, Y(v), x0 + w, Y(v)}, "#eee", 1.0);
+    cv.text(x0 - 6, Y(v) + 4, buf, TextAnchor::kEnd, 11);
   }
+  cv.rect(x0, y0, w, h, "none", "#444", 1.0);
   // Series: per method, points joined in x order, circles for mean_rel, open squares for gross.
   for (size_t mi = 0; mi < methods.size(); ++mi) {
     const std::string color = colorOf(methods[mi], mi);
@@ -145,24 +128,20 @@ void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool b
     for (int measure = 0; measure < 2; ++measure) {
       auto yv = [&](size_t i) { return measure == 0 ? points[i].meanRel : points[i].gross; };
       if (idx.size() > 1) {
-        svg << "<polyline fill='none' stroke='" << color << "' stroke-width='1.5'"
-            << (measure == 1 ? " stroke-dasharray='2 2'" : "") << " points='";
-        for (size_t i : idx) svg << num(X(xs[i])) << "," << num(Y(yv(i))) << " ";
-        svg << "'/>\n";
+        std::vector<double> line;
+        for (size_t i : idx) line.insert(line.end(), {X(xs[i]), Y(yv(i))});
+        cv.polyline(line, color, 1.5, measure == 1 ? 2.0 : 0.0, measure == 1 ? 2.0 : 0.0);
       }
       for (size_t i : idx) {
         if (measure == 0)
-          svg << "<circle cx='" << num(X(xs[i])) << "' cy='" << num(Y(yv(i))) << "' r='4' fill='" << color
-              << "'/>\n";
+          cv.circle(X(xs[i]), Y(yv(i)), 4, color, "none", 0.0);
         else
-          svg << "<rect x='" << num(X(xs[i]) - 3.5) << "' y='" << num(Y(yv(i)) - 3.5)
-              << "' width='7' height='7' fill='white' stroke='" << color << "' stroke-width='1.5'/>\n";
+          cv.rect(X(xs[i]) - 3.5, Y(yv(i)) - 3.5, 7, 7, "white", color, 1.5);
       }
     }
     for (size_t i : idx)
       if (!points[i].label.empty())
-        svg << "<text x='" << num(X(xs[i]) + 6) << "' y='" << num(Y(points[i].meanRel) - 6)
-            << "' font-size='10' fill='" << color << "'>" << escape(points[i].label) << "</text>\n";
+        cv.text(X(xs[i]) + 6, Y(points[i].meanRel) - 6, points[i].label, TextAnchor::kStart, 10, color);
   }
   if (options.pareto) {
     for (int measure = 0; measure < 2; ++measure) {
@@ -170,48 +149,60 @@ void panel(std::ostringstream& svg, const std::vector<PlotPoint>& points, bool b
       for (const PlotPoint& p : points) ys.push_back(measure == 0 ? p.meanRel : p.gross);
       const std::vector<size_t> front = paretoFront(xs, ys);
       if (front.empty()) continue;
-      svg << "<polyline fill='none' stroke='#222' stroke-width='1' stroke-dasharray='5 3' points='";
+      std::vector<double> step;
       for (size_t k = 0; k < front.size(); ++k) {
         const size_t i = front[k];
-        if (k > 0) svg << num(X(xs[i])) << "," << num(Y(ys[front[k - 1]])) << " ";
-        svg << num(X(xs[i])) << "," << num(Y(ys[i])) << " ";
+        if (k > 0) step.insert(step.end(), {X(xs[i]), Y(ys[front[k - 1]])});
+        step.insert(step.end(), {X(xs[i]), Y(ys[i])});
       }
-      svg << "'/>\n";
-      for (size_t i : front)
-        svg << "<circle cx='" << num(X(xs[i])) << "' cy='" << num(Y(ys[i]))
-            << "' r='7' fill='none' stroke='#222' stroke-width='1'/>\n";
+      if (step.size() >= 4) cv.polyline(step, "#222", 1.0, 5.0, 3.0);
+      for (size_t i : front) cv.circle(X(xs[i]), Y(ys[i]), 7, "none", "#222", 1.0);
     }
+  }
+}
+
+std::vector<std::string> methodsOf(const std::vector<PlotPoint>& points) {
+  std::vector<std::string> methods;
+  for (const PlotPoint& p : points)
+    if (std::find(methods.begin(), methods.end(), p.method) == methods.end()) methods.push_back(p.method);
+  return methods;
+}
+
+}  // namespace
+
+namespace {
+
+void drawEvalPlot(PlotCanvas& cv, const std::vector<PlotPoint>& points, const PlotOptions& options) {
+  const std::vector<std::string> methods = methodsOf(points);
+  const double width = plotWidth();
+  cv.text(width / 2, 20, options.title, TextAnchor::kMiddle, 14);
+  cv.text(width / 2, 36,
+          std::string(
+              "filled circles: mean_rel_error; open squares: gross_error (fraction off by more than 2x)") +
+              (options.pareto ? "; ringed, dashed black: Pareto front" : ""),
+          TextAnchor::kMiddle, 11, "#555");
+  panel(cv, points, true, 0.0, "bytes the lookup touches", options, methods);
+  panel(cv, points, false, kPanelW, options.timeAxis, options, methods);
+  for (size_t mi = 0; mi < methods.size(); ++mi) {
+    const double lx = 24 + double(mi % 4) * (width - 48) / 4,
+                 ly = kPanelH + 8 + kLegendH * double(mi / 4) + 12;
+    cv.circle(lx, ly - 4, 5, colorOf(methods[mi], mi), "none", 0.0);
+    cv.text(lx + 10, ly, methods[mi], TextAnchor::kStart, 12);
   }
 }
 
 }  // namespace
 
 std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions& options) {
-  std::vector<std::string> methods;
-  for (const PlotPoint& p : points)
-    if (std::find(methods.begin(), methods.end(), p.method) == methods.end()) methods.push_back(p.method);
-  const double width = 2 * kPanelW, height = kPanelH + kLegendH * double((methods.size() + 3) / 4) + 24;
-  std::ostringstream svg;
-  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << num(width) << "' height='" << num(height)
-      << "' viewBox='0 0 " << num(width) << " " << num(height)
-      << "' font-family='Helvetica, Arial, sans-serif' font-size='12'>\n";
-  svg << "<rect width='100%' height='100%' fill='white'/>\n";
-  svg << "<text x='" << num(width / 2) << "' y='20' text-anchor='middle' font-size='14'>"
-      << escape(options.title) << "</text>\n";
-  svg << "<text x='" << num(width / 2) << "' y='36' text-anchor='middle' font-size='11' fill='#555'>"
-      << "filled circles: mean_rel_error; open squares: gross_error (fraction off by more than 2x)"
-      << (options.pareto ? "; ringed, dashed black: Pareto front" : "") << "</text>\n";
-  panel(svg, points, true, 0.0, "bytes the lookup touches", options, methods);
-  panel(svg, points, false, kPanelW, options.timeAxis, options, methods);
-  for (size_t mi = 0; mi < methods.size(); ++mi) {
-    const double lx = 24 + double(mi % 4) * (width - 48) / 4,
-                 ly = kPanelH + 8 + kLegendH * double(mi / 4) + 12;
-    svg << "<circle cx='" << num(lx) << "' cy='" << num(ly - 4) << "' r='5' fill='"
-        << colorOf(methods[mi], mi) << "'/>\n<text x='" << num(lx + 10) << "' y='" << num(ly) << "'>"
-        << escape(methods[mi]) << "</text>\n";
-  }
-  svg << "</svg>\n";
-  return svg.str();
+  SvgCanvas cv(plotWidth(), plotHeight(methodsOf(points).size()));
+  drawEvalPlot(cv, points, options);
+  return cv.finish();
+}
+
+Rgb8Image evalPlotImage(const std::vector<PlotPoint>& points, const PlotOptions& options, double scale) {
+  RasterCanvas cv(plotWidth(), plotHeight(methodsOf(points).size()), scale);
+  drawEvalPlot(cv, points, options);
+  return cv.finish();
 }
 
 }  // namespace tetraprobe::cli

@@ -1,9 +1,11 @@
 // `tetraprobe eval --plot`: error against memory and against run time, one point per method (and per level of
-// a sweep), as a hand-written SVG of two panels. No dependencies.
+// a sweep), as a chart of two panels written as SVG or as a PNG raster (plot_canvas.h). No dependencies.
 #pragma once
 
 #include <string>
 #include <vector>
+
+#include "image_compare.h"
 
 namespace tetraprobe::cli {
 
@@ -25,5 +27,9 @@ struct PlotOptions {
 // axes log10, y linear from 0. With options.pareto, the points on each measure's Pareto front over all
 // methods are ringed and joined by a dashed step line.
 std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions& options);
+
+// The same chart as a raster, `scale` pixels per SVG user unit (920 x 372 units for up to four methods, a
+// legend row more per four), antialiased, text in the bitmap font. Write it with writeImage8.
+Rgb8Image evalPlotImage(const std::vector<PlotPoint>& points, const PlotOptions& options, double scale = 2.0);
 
 }  // namespace tetraprobe::cli
