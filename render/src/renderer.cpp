@@ -26,6 +26,7 @@
 #include "lighting.comp.h"
 #include "lighting_grid.comp.h"
 #include "lighting_grid_texture.comp.h"
+#include "lighting_nearest.comp.h"
 #include "pipelines.h"
 #include "shadow_lights.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
@@ -137,6 +138,27 @@ struct GridHeader {
 };
 static_assert(sizeof(GridHeader) == 48, "lighting_grid.comp header: vec4 min, vec4 step, ivec4 dims");
 
+// The nearest-probe buckets' storage buffer header (shaders/lighting_nearest.comp), 32 bytes.
+struct NearestHeader {
+  float min[4];     // xyz: lower corner, local frame; w: cell size
+  int32_t dims[4];  // xyz: cells per axis; w: probe count
+};
+static_assert(sizeof(NearestHeader) == 32,
+              "lighting_nearest.comp header: vec4 min (w cell), ivec4 dims (w probes)");
+
+// A lighting pass that reads one storage buffer (set 0, binding 0) instead of a level: the grid or the
+// nearest-probe competitor of `tetraprobe eval`.
+struct OneBufferLookup {
+  std::string bytes;
+  const uint32_t* spirv = nullptr;
+  size_t spirvBytes = 0;
+};
+
+template <typename T>
+void appendBytes(std::string& out, const T* data, size_t count) {
+  out.append(reinterpret_cast<const char*>(data), count * sizeof(T));
+}
+
 void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags srcStage, VkPipelineStageFlags dstStage,
                    VkAccessFlags src, VkAccessFlags dst) {
   VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -229,10 +251,10 @@ bool usesLighting(RenderMode m) {
   return m == RenderMode::kIrradiance || m == RenderMode::kIndirect || m == RenderMode::kFull;
 }
 
-// The lighting pass reads either a level (tetraprobe.glsl, set 0 = the level's buffers) or a grid
-// (lighting_grid.comp, set 0 binding 0 = one buffer).
+// The lighting pass reads either a level (tetraprobe.glsl, set 0 = the level's buffers) or one buffer
+// (lighting_grid.comp or lighting_nearest.comp, set 0 binding 0).
 RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const Level* level,
-                        const ProbeQuery* query, const RenderGrid* grid, const RenderView& view,
+                        const ProbeQuery* query, const OneBufferLookup* grid, const RenderView& view,
                         const RenderOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (view.width <= 0 || view.height <= 0 || view.width > 16384 || view.height > 16384)
@@ -285,21 +307,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       throw std::runtime_error("render: level upload failed: " + uploadError);
     cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
   } else {
-    const size_t nodes = size_t(grid->dims.x) * size_t(grid->dims.y) * size_t(grid->dims.z);
-    const VkDeviceSize bytes = sizeof(GridHeader) + nodes * sizeof(ShRgb);
-    gridBuffer = ctx.createBuffer(bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
-    GridHeader header{};
-    const glm::vec3 localMin(grid->min - origin);
-    for (int a = 0; a < 3; ++a) {
-      header.min[a] = localMin[a];
-      header.step[a] = float(grid->step);
-      header.dims[a] = grid->dims[a];
-    }
-    void* mapped;
-    vkCheck(vkMapMemory(device, gridBuffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (grid)");
-    std::memcpy(mapped, &header, sizeof header);
-    std::memcpy(static_cast<char*>(mapped) + sizeof header, grid->sh, nodes * sizeof(ShRgb));
-    vkUnmapMemory(device, gridBuffer.memory);
+    gridBuffer = ctx.createBuffer(grid->bytes.size(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);
+    fillBuffer(device, gridBuffer, grid->bytes.data(), grid->bytes.size(), "vkMapMemory (one-buffer lookup)");
   }
 
   const GpuBuffer vertices =
@@ -435,9 +444,7 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   };
   VkPipeline lightingPipeline = VK_NULL_HANDLE, directPipeline = VK_NULL_HANDLE,
              debugPipeline = VK_NULL_HANDLE;
-  if (usesLighting(mode))
-    lightingPipeline =
-        level ? lookup(variant) : compute(kSpirv_lighting_grid_comp, sizeof(kSpirv_lighting_grid_comp));
+  if (usesLighting(mode)) lightingPipeline = level ? lookup(variant) : compute(grid->spirv, grid->spirvBytes);
   // Bench passes (levels only): the lookup in other variants, a constant, the grid from 3D textures.
   std::vector<std::pair<std::string, VkPipeline>> benchPipelines;
   for (const ShaderVariant& v : options.benchVariants)
@@ -810,7 +817,51 @@ RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, co
   if (grid.dims.x < 2 || grid.dims.y < 2 || grid.dims.z < 2 || !grid.sh || !(grid.step > 0.0))
     throw std::runtime_error("render: a grid needs at least 2 nodes per axis, a positive step and its SH");
   const glm::dvec3 centre = grid.min + glm::dvec3(grid.dims - 1) * grid.step * 0.5;
-  return renderImpl(mesh, glm::round(centre), nullptr, nullptr, &grid, view, RenderOptions{});
+  const glm::dvec3 origin = glm::round(centre);
+  const size_t nodes = size_t(grid.dims.x) * size_t(grid.dims.y) * size_t(grid.dims.z);
+  GridHeader header{};
+  const glm::vec3 localMin(grid.min - origin);
+  for (int a = 0; a < 3; ++a) {
+    header.min[a] = localMin[a];
+    header.step[a] = float(grid.step);
+    header.dims[a] = grid.dims[a];
+  }
+  OneBufferLookup one;
+  appendBytes(one.bytes, &header, 1);
+  appendBytes(one.bytes, grid.sh, nodes);
+  one.spirv = kSpirv_lighting_grid_comp;
+  one.spirvBytes = sizeof(kSpirv_lighting_grid_comp);
+  return renderImpl(mesh, origin, nullptr, nullptr, &one, view, RenderOptions{});
+}
+
+RenderResult renderNearestProbe(const RenderMesh& mesh, const RenderNearest& nearest,
+                                const RenderView& view) {
+  const glm::ivec3 d = nearest.dims;
+  const size_t n = nearest.probeCount;
+  if (d.x < 1 || d.y < 1 || d.z < 1 || n < 1 || n > size_t(INT32_MAX / 32) || !(nearest.cell > 0.0f) ||
+      !nearest.cellStart || !nearest.order || !nearest.positions || !nearest.sh ||
+      double(d.x) * d.y * d.z > double(INT32_MAX / 4))
+    throw std::runtime_error(
+        "render: nearest-probe buckets need cells, probes, a positive cell size and data");
+  const size_t cells = size_t(d.x) * size_t(d.y) * size_t(d.z);
+  if (nearest.cellStart[cells] != n)
+    throw std::runtime_error("render: nearest-probe buckets do not hold every probe");
+  NearestHeader header{};
+  for (int a = 0; a < 3; ++a) {
+    header.min[a] = nearest.min[a];
+    header.dims[a] = d[a];
+  }
+  header.min[3] = nearest.cell;
+  header.dims[3] = int32_t(n);
+  OneBufferLookup one;
+  appendBytes(one.bytes, &header, 1);
+  appendBytes(one.bytes, nearest.cellStart, cells + 1);
+  appendBytes(one.bytes, nearest.order, n);
+  appendBytes(one.bytes, nearest.positions, n);
+  appendBytes(one.bytes, nearest.sh, n);
+  one.spirv = kSpirv_lighting_nearest_comp;
+  one.spirvBytes = sizeof(kSpirv_lighting_nearest_comp);
+  return renderImpl(mesh, nearest.origin, nullptr, nullptr, &one, view, RenderOptions{});
 }
 
 }  // namespace tetraprobe

@@ -21,6 +21,7 @@
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/eval/grid_volume.h"
+#include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/file_io.h"
@@ -132,6 +133,21 @@ LevelUnderTest prepareLevel(std::shared_ptr<Level> level, const EvalSetup& setup
       auto plainQuery = std::make_shared<ProbeQuery>(*plain);
       c.gpu = [&setup, plain, plainQuery](const RenderView& v) {
         return renderLevel(setup.mesh, *plain, *plainQuery, v).timings;
+      };
+    } else if (c.method.name == "nearest") {
+      auto buckets = std::make_shared<const NearestProbe>(*level);  // the same buckets the CPU method builds
+      c.gpu = [&setup, level, buckets](const RenderView& v) {
+        RenderNearest g;
+        g.origin = level->origin;
+        g.min = buckets->bucketMin();
+        g.cell = buckets->bucketCell();
+        g.dims = buckets->bucketDims();
+        g.probeCount = level->probes.size();
+        g.cellStart = buckets->bucketStart().data();
+        g.order = buckets->bucketOrder().data();
+        g.positions = level->probes.data();
+        g.sh = level->sh.data();
+        return renderNearestProbe(setup.mesh, g, v).timings;
       };
     }
     out.candidates.push_back(std::move(c));
@@ -628,7 +644,7 @@ int cmdEval(int argc, char** argv) {
     po.pareto = !sweepRows.empty();
     std::vector<PlotPoint> points;
     auto add = [&](const MethodResult& m, const std::string& label) {
-      // Methods without a GPU pass (nearest) are placed by CPU time only when no method has a GPU time.
+      // A method without a GPU pass (tet+occlusion) is placed by CPU time only when no method has a GPU time.
       points.push_back({m.name, label, double(m.bytes), haveGpu ? m.gpuMs : m.cpuNsCoherent, m.meanRelError,
                         m.grossError});
     };

@@ -132,6 +132,21 @@ struct RenderGrid {
   const ShRgb* sh = nullptr;  // must stay valid during the call
 };
 
+// The nearest-probe competitor of `tetraprobe eval` as the GPU reads it: a uniform bucket grid over the
+// probes (eval/nearest_probe.h builds it). Positions are in the frame whose origin is `origin` (world,
+// metres); every pointer must stay valid during the call.
+struct RenderNearest {
+  glm::dvec3 origin{0.0};
+  glm::vec3 min{0.0f};  // the grid's lower corner, local frame
+  float cell = 1.0f;    // cell size, metres, > 0
+  glm::ivec3 dims{0};   // cells per axis, each >= 1
+  size_t probeCount = 0;
+  const uint32_t* cellStart = nullptr;  // cells + 1 prefix sums into `order`; cellStart[cells] == probeCount
+  const uint32_t* order = nullptr;      // probe indices by cell
+  const glm::vec3* positions = nullptr;
+  const ShRgb* sh = nullptr;
+};
+
 // What renderLevel draws besides the mesh and the level, and how it times the GPU.
 struct RenderOptions {
   std::vector<RenderLight> lights;  // kFull: the direct light (world frame)
@@ -187,6 +202,11 @@ RenderResult renderLevel(const RenderMesh& mesh, const Level& level, const Probe
 // RenderResult::position is relative to it. Throws std::runtime_error as renderLevel, and for dims below 2,
 // a step that is not positive or no SH.
 RenderResult renderGridVolume(const RenderMesh& mesh, const RenderGrid& grid, const RenderView& view);
+
+// The same with the nearest probe's SH per pixel (shaders/lighting_nearest.comp, which mirrors
+// NearestProbe::nearest), for timing the `nearest` method on the GPU. The local frame is nearest.origin.
+// Throws std::runtime_error as renderLevel, and for buckets that are empty or do not hold every probe.
+RenderResult renderNearestProbe(const RenderMesh& mesh, const RenderNearest& nearest, const RenderView& view);
 
 // Scale that maps the 95th percentile of luminance (Rec. 709 weights) over geometry pixels (a > 0) to 0.8.
 // Returns 1 when there is no geometry or the percentile is not positive.
