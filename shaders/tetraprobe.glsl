@@ -602,17 +602,30 @@ vec3 tetraprobeShIrradianceVariant(vec3 c[9], vec3 n) {
   return e;
 }
 
+// Coefficient i of probe p: three binary16 values times the probe's power-of-two scale (tetraprobe::ShHalf,
+// runtime/sh_half.h: 14 uints a probe from 3 * tetraprobeProbeCount, the scale in the high half of the
+// last). Exact in float, so these are the floats decodeShHalf gives the CPU.
+float tetraprobeShScale(int p) {
+  return unpackHalf2x16(tetraprobeProbeData[3 * tetraprobeProbeCount + 14 * p + 13]).y;
+}
+vec3 tetraprobeProbeSh(int p, int i, float scale) {
+  int base = 3 * tetraprobeProbeCount + 14 * p;
+  int j = 3 * i;  // halves j, j + 1, j + 2; half k lives in uint k / 2, low bits for even k
+  vec2 a = unpackHalf2x16(tetraprobeProbeData[base + (j >> 1)]);
+  vec2 b = unpackHalf2x16(tetraprobeProbeData[base + (j >> 1) + 1]);
+  vec3 h = (j & 1) == 0 ? vec3(a.x, a.y, b.x) : vec3(a.y, b.x, b.y);
+  return h * scale;
+}
+
 // Blends the RGB coefficients of tet t's probes with weights w (probe 0 first, as shBlend does): the first
 // tetraprobeShCount; the others are 0.
 void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
   ivec4 v = tetraprobeTets[t].v;
   for (int i = 0; i < 9; ++i) c[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
-    int base = 3 * tetraprobeProbeCount + 27 * v[k];
+    float scale = tetraprobeShScale(v[k]);
     for (int i = 0; i < tetraprobeShCount; ++i) {
-      int o = base + 3 * i;
-      vec3 sh = uintBitsToFloat(
-          uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
+      vec3 sh = tetraprobeProbeSh(v[k], i, scale);
       precise vec3 s = c[i] + sh * w[k];
       c[i] = s;
     }
@@ -625,11 +638,9 @@ void tetraprobeBlendSh3(int t, vec4 w, vec4 p, vec4 u, out vec3 cw[9], out vec3 
   ivec4 v = tetraprobeTets[t].v;
   for (int i = 0; i < 9; ++i) cw[i] = cp[i] = cu[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
-    int base = 3 * tetraprobeProbeCount + 27 * v[k];
+    float scale = tetraprobeShScale(v[k]);
     for (int i = 0; i < tetraprobeShCount; ++i) {
-      int o = base + 3 * i;
-      vec3 sh = uintBitsToFloat(
-          uvec3(tetraprobeProbeData[o], tetraprobeProbeData[o + 1], tetraprobeProbeData[o + 2]));
+      vec3 sh = tetraprobeProbeSh(v[k], i, scale);
       precise vec3 sw = cw[i] + sh * w[k], sp = cp[i] + sh * p[k], su = cu[i] + sh * u[k];
       cw[i] = sw;
       cp[i] = sp;

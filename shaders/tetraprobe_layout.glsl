@@ -30,8 +30,10 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly 
   TetraprobeTet tetraprobeTets[];
 };
 
-// Float bits. Probe p's position (local frame, metres) at 3 * p + 0..2; its SH coefficient i (index
-// l*(l+1)+m), channel c (0 r, 1 g, 2 b) at 3 * tetraprobeProbeCount + 27 * p + 3 * i + c.
+// Probe p's position (local frame, metres; float bits) at 3 * p + 0..2; its SH (tetraprobe::ShHalf) as 14
+// uints from 3 * tetraprobeProbeCount + 14 * p: binary16 k (k = 3 * coefficient + channel, coefficient index
+// l*(l+1)+m, channel 0 r, 1 g, 2 b) in the low (k even) or high (k odd) half of uint k / 2, and the probe's
+// power-of-two scale in the high half of uint 13 (tetraprobeProbeSh in tetraprobe.glsl).
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 1) readonly buffer TetraprobeProbes {
   uint tetraprobeProbeData[];
 };

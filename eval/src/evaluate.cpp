@@ -20,6 +20,7 @@
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 namespace tetraprobe {
 
@@ -197,7 +198,8 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
   const Level& level = query.level();
   std::vector<ByteSection> out = {
       {"positions", level.probes.size() * sizeof(glm::vec3)},
-      {"sh", level.sh.size() * sizeof(ShRgb)},
+      {"sh",
+       level.sh.size() * sizeof(ShHalf)},  // as the file and the GPU hold them (the CPU expands to float)
       {"tets", level.tets.size() * sizeof(Tet)},
       {"cell_grid", cellGridBytes(query.cellGrid())},
       {"outer_cells", query.outerCells().size() * sizeof(OuterCell)},
@@ -246,7 +248,7 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
   LookupMethod near;
   near.name = "nearest";
   near.sections = {{"positions", probes * sizeof(glm::vec3)},
-                   {"sh", probes * sizeof(ShRgb)},
+                   {"sh", probes * sizeof(ShHalf)},
                    {"buckets", nearest->bytes()}};
   near.bytes = totalBytes(near.sections);
   near.probes = probes;

@@ -118,6 +118,8 @@ GridVolume bakeGridVolume(const SceneTracer& tracer, const GridLayout& layout, c
   d.threads = bake.threads;
   std::vector<ShRgb> deringed = grid.sh();
   local.dering = deringProbes(deringed, d);
+  // Stored as a level stores its probes (half precision, sh_half.h): the grid is charged kGridNodeBytes.
+  for (ShRgb& s : deringed) s = quantizeSh(s);
   std::vector<uint8_t> flags = grid.invalid();
   // Rebuilding with the windowed SH: dilation copies valid nodes, so the invalid ones are overwritten with
   // the same windowed values their source now holds.

@@ -16,6 +16,7 @@
 
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 #include "crc32.h"
 
@@ -31,7 +32,8 @@ constexpr uint32_t kMaxSections = 64;
 constexpr uint64_t kMaxSectionBytes = uint64_t(1) << 40;  // bounds every size sum below 2^47
 constexpr uint32_t kSectionRequired = 1u;      // flags: a reader that does not know the tag must refuse
 constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
-constexpr uint64_t kShBytes = 27 * 4;          // SH: 9 coefficients x RGB f32
+constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficients x RGB f32
+constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
 constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // v[4] i32, n[4] i32
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
@@ -42,7 +44,8 @@ constexpr uint64_t kMaxGeneratorBytes = 1u << 20;
 // on load could leave the int32 range for small cells. The bake centres the origin on the probes.
 constexpr float kMaxLocalCoordinate = 16777216.0f;
 static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 32-byte std430 Tet");
-static_assert(kShBytes == sizeof(ShRgb), "the file's SH record is the 108-byte ShRgb");
+static_assert(kShBytes == sizeof(ShRgb), "the old SH record is the 108-byte ShRgb");
+static_assert(kShHalfBytes == sizeof(ShHalf), "the file's SH record is the 56-byte ShHalf");
 static_assert(kOuterCellBytes == sizeof(OuterCell), "the file's outer cell record is the 80-byte OuterCell");
 
 // Section tags: four ASCII characters, read as a little-endian u32.
@@ -50,9 +53,10 @@ constexpr uint32_t tag(const char (&s)[5]) {
   return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 |
          uint32_t(uint8_t(s[3])) << 24;
 }
-constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagTets = tag("TETS"),
-                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
-                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
+constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
+                   kTagTets = tag("TETS"), kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"),
+                   kTagCellGrid = tag("CGR2"), kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"),
+                   kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
@@ -366,13 +370,16 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
     sections.back().bytes.f32(p.y);
     sections.back().bytes.f32(p.z);
   }
-  sections.push_back({kTagSh, kSectionRequired, {}});
-  for (const ShRgb& sh : level.sh)
-    for (const glm::vec3& c : sh.c) {
-      sections.back().bytes.f32(c.x);
-      sections.back().bytes.f32(c.y);
-      sections.back().bytes.f32(c.z);
-    }
+  sections.push_back({kTagShHalf, kSectionRequired, {}});
+  for (size_t p = 0; p < level.sh.size(); ++p) {
+    ShHalf h;
+    if (!encodeShHalf(level.sh[p], &h))
+      return fail(
+          LevelStatus::kWriteFailed,
+          path + ": refusing to write an invalid level: probe " + std::to_string(p) +
+              " has an SH coefficient beyond the file's half-precision range (|c| > 2.1e9 W/(m^2 sr))");
+    for (uint16_t v : h.h) sections.back().bytes.i16(int16_t(v));
+  }
   sections.push_back({kTagTets, kSectionRequired, {}});
   for (const Tet& t : level.tets) {
     Writer& w = sections.back().bytes;
@@ -519,7 +526,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                            " probes, " + std::to_string(tetCount) + " tets, " +
                                            std::to_string(generatorBytes) + " generator bytes");
   const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
-  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShBytes) + tetCount * kTetBytes +
+  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) + tetCount * kTetBytes +
                            generatorBytes + kTrailerBytes;
   if (size < minimum)
     return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
@@ -533,7 +540,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, tets, generator, outer, cellGrid, occlusion, kinds, stream;
+  Section probes, sh, shHalf, tets, generator, outer, cellGrid, occlusion, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -545,6 +552,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     expected += bytes;
     Section* known = t == kTagProbes       ? &probes
                      : t == kTagSh         ? &sh
+                     : t == kTagShHalf     ? &shHalf
                      : t == kTagTets       ? &tets
                      : t == kTagGenerator  ? &generator
                      : t == kTagOuterCells ? &outer
@@ -581,7 +589,13 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     return {};
   };
   if (LevelResult e = sized(probes, probeCount * kProbeBytes, "probe"); !e) return e;
-  if (LevelResult e = sized(sh, probeCount * kShBytes, "SH"); !e) return e;
+  // SH: half precision (SHRH, what saveLevel writes) or float (SHRG, levels written before it), not both.
+  if (sh.present && shHalf.present)
+    return fail(LevelStatus::kCorrupt, name + "both SHRG and SHRH SH sections");
+  if (LevelResult e = shHalf.present ? sized(shHalf, probeCount * kShHalfBytes, "SH")
+                                     : sized(sh, probeCount * kShBytes, "SH");
+      !e)
+    return e;
   if (LevelResult e = sized(tets, tetCount * kTetBytes, "tet"); !e) return e;
   if (LevelResult e = sized(generator, generatorBytes, "generator"); !e) return e;
   if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
@@ -626,14 +640,29 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     p.y = body.f32();
     p.z = body.f32();
   }
-  body = Reader(data + sh.offset);
   level.sh.resize(size_t(probeCount));
-  for (ShRgb& s : level.sh)
-    for (glm::vec3& c : s.c) {
-      c.x = body.f32();
-      c.y = body.f32();
-      c.z = body.f32();
+  if (shHalf.present) {
+    body = Reader(data + shHalf.offset);
+    for (size_t p = 0; p < level.sh.size(); ++p) {
+      ShHalf h;
+      for (uint16_t& v : h.h) v = uint16_t(body.i16());
+      bool valid = true;
+      level.sh[p] = decodeShHalf(h, &valid);
+      if (!valid)
+        return fail(LevelStatus::kCorrupt,
+                    name + "probe " + std::to_string(p) +
+                        ": SH record holds a non-finite value or a scale that is not a "
+                        "power of two in [2^-24, 2^15]");
     }
+  } else {
+    body = Reader(data + sh.offset);
+    for (ShRgb& s : level.sh)
+      for (glm::vec3& c : s.c) {
+        c.x = body.f32();
+        c.y = body.f32();
+        c.z = body.f32();
+      }
+  }
   body = Reader(data + tets.offset);
   level.tets.resize(size_t(tetCount));
   for (Tet& t : level.tets) {

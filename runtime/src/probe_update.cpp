@@ -2,6 +2,8 @@
 // (probe_update.h). Nothing else in a level or a ProbeQuery depends on the SH, so nothing is rebuilt.
 #include "tetraprobe/runtime/probe_update.h"
 
+#include "tetraprobe/runtime/sh_half.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -33,11 +35,13 @@ ShUpdateResult setProbeSh(Level& level, size_t first, std::span<const ShRgb> sh)
       };
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         return fail(ShUpdateStatus::kNonFinite, where() + " is not finite");
+      if (std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}) > float(kShHalfMaxMagnitude))
+        return fail(ShUpdateStatus::kTooLarge, where() + " is beyond half precision's range (|c| > 2.1e9)");
       if (level.shOrder == 1 && c >= 4 && v != glm::vec3(0.0f))
         return fail(ShUpdateStatus::kNotL1, where() + " is not zero on an L1 level");
     }
   }
-  std::copy(sh.begin(), sh.end(), level.sh.begin() + std::ptrdiff_t(first));
+  for (size_t i = 0; i < sh.size(); ++i) level.sh[first + i] = quantizeSh(sh[i]);
   return {};
 }
 

@@ -9,6 +9,8 @@
 // does not hold: the coarse set answers there.
 #include "tetraprobe/runtime/streaming.h"
 
+#include "tetraprobe/runtime/sh_half.h"
+
 #include <algorithm>
 #include <bit>
 #include <climits>
@@ -101,6 +103,7 @@ size_t indexOf(const std::vector<uint32_t>& sorted, uint32_t v) {
 struct StreamingLevel::File {
   std::ifstream in;
   uint64_t probes = 0, sh = 0, tets = 0;  // section offsets
+  uint64_t shRecord = 108;                // SH bytes a probe: 108 (SHRG, float) or 56 (SHRH, ShHalf)
   uint64_t occl = 0;                      // 0: no occlusion section
   uint64_t strm = 0;                      // the streaming index section
   uint64_t probeCount = 0, tetCount = 0, planeCount = 0, blockCount = 0;
@@ -188,7 +191,11 @@ LevelResult StreamingLevel::open(const std::string& path) {
       return fail(LevelStatus::kCorrupt, name + "section " + std::to_string(i) + ": bad offset or size");
     expected += bytes;
     if (t == tag("PRBS")) f->probes = offset, probesSize = bytes, haveProbes = true;
-    if (t == tag("SHRG")) f->sh = offset, shSize = bytes, haveSh = true;
+    if (t == tag("SHRG") || t == tag("SHRH")) {
+      if (haveSh) return fail(LevelStatus::kCorrupt, name + "more than one SH section");
+      f->sh = offset, shSize = bytes, haveSh = true;
+      f->shRecord = t == tag("SHRH") ? sizeof(ShHalf) : sizeof(ShRgb);
+    }
     if (t == tag("TETS")) f->tets = offset, tetsSize = bytes, haveTets = true;
     if (t == tag("OCCL")) f->occl = offset, occlSize = bytes;
     if (t == tag("STRM")) strm = offset, strmSize = bytes;
@@ -197,7 +204,7 @@ LevelResult StreamingLevel::open(const std::string& path) {
     return fail(size < expected + 4 ? LevelStatus::kTruncated : LevelStatus::kCorrupt,
                 name + "file size does not match the section table");
   if (!haveProbes || !haveSh || !haveTets || probesSize != 12 * f->probeCount ||
-      shSize != 108 * f->probeCount || tetsSize != 32 * f->tetCount)
+      shSize != f->shRecord * f->probeCount || tetsSize != 32 * f->tetCount)
     return fail(LevelStatus::kCorrupt, name + "probe, SH or tet section missing or mis-sized");
   // The payload checksum, in pieces: the records load() reads later are the ones checked here.
   {
@@ -371,10 +378,19 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   for (uint32_t p : s->probeIds) {
     if (!f.read(f.probes + 12ull * p, buf, 12)) return fail(LevelStatus::kCannotOpen, where + "read failed");
     s->positions.emplace_back(f32At(buf), f32At(buf + 4), f32At(buf + 8));
-    if (!f.read(f.sh + 108ull * p, buf, 108)) return fail(LevelStatus::kCannotOpen, where + "read failed");
+    if (!f.read(f.sh + f.shRecord * p, buf, size_t(f.shRecord)))
+      return fail(LevelStatus::kCannotOpen, where + "read failed");
     ShRgb sh;
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int a = 0; a < 3; ++a) sh.c[size_t(i)][a] = f32At(buf + 12 * i + 4 * a);
+    if (f.shRecord == sizeof(ShHalf)) {
+      ShHalf h;
+      for (int k = 0; k < 28; ++k) h.h[k] = uint16_t(buf[2 * k] | buf[2 * k + 1] << 8);
+      bool valid = true;
+      sh = decodeShHalf(h, &valid);
+      if (!valid) return bad("probe " + std::to_string(p) + ": SH record is not valid half precision");
+    } else {
+      for (int i = 0; i < kShCoeffCount; ++i)
+        for (int a = 0; a < 3; ++a) sh.c[size_t(i)][a] = f32At(buf + 12 * i + 4 * a);
+    }
     s->sh.push_back(sh);
   }
   if (f.occl != 0) {

@@ -1,16 +1,33 @@
 // Run-time SH updates of an uploaded level's probe buffer (vulkan_upload.h): a mapped write for an idle
-// buffer, and a recorded vkCmdUpdateBuffer between two barriers for frames in flight. Both copy Level::sh as
-// uploadLevelBuffers laid it out (gpu_layout.h): positions first, then 27 floats a probe.
+// buffer, and a recorded vkCmdUpdateBuffer between two barriers for frames in flight. Both write Level::sh as
+// uploadLevelBuffers laid it out (gpu_layout.h): positions first, then one ShHalf (56 bytes) a probe.
 #include "tetraprobe/runtime/vulkan_upload.h"
+
+#include "tetraprobe/runtime/sh_half.h"
 
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <vector>
 
 namespace tetraprobe {
 namespace {
 
-constexpr VkDeviceSize kShBytes = sizeof(ShRgb);
+constexpr VkDeviceSize kShBytes = sizeof(ShHalf);
+
+// The half-precision records of probes [first, first + count); false (error set) for SH it cannot hold.
+bool encodeRange(const Level& level, size_t first, size_t count, std::vector<ShHalf>& out,
+                 std::string* error) {
+  out.resize(count);
+  for (size_t i = 0; i < count; ++i)
+    if (!encodeShHalf(level.sh[first + i], &out[i])) {
+      if (error)
+        *error = "probe " + std::to_string(first + i) +
+                 " has an SH coefficient that is not finite or beyond half precision's range (|c| > 2.1e9)";
+      return false;
+    }
+  return true;
+}
 constexpr VkDeviceSize kUpdateChunk = 65536;  // vkCmdUpdateBuffer's limit on dataSize
 
 // Checks the range against the level and the level against the buffer; sets `offset` to the first byte.
@@ -42,6 +59,8 @@ VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const 
   VkDeviceSize offset = 0;
   if (!checkRange(buffers, level, first, count, &offset, error)) return VK_ERROR_INITIALIZATION_FAILED;
   if (count == 0) return VK_SUCCESS;
+  std::vector<ShHalf> records;
+  if (!encodeRange(level, first, count, records, error)) return VK_ERROR_INITIALIZATION_FAILED;
   void* mapped = nullptr;
   const VkDeviceSize bytes = VkDeviceSize(count) * kShBytes;
   const VkResult r = vkMapMemory(device, buffers.memory[kGpuBindingProbes], offset, bytes, 0, &mapped);
@@ -49,7 +68,7 @@ VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const 
     if (error) *error = "vkMapMemory of the probe buffer failed (VkResult " + std::to_string(r) + ")";
     return r;
   }
-  std::memcpy(mapped, level.sh.data() + first, size_t(bytes));
+  std::memcpy(mapped, records.data(), size_t(bytes));
   vkUnmapMemory(device, buffers.memory[kGpuBindingProbes]);
   return VK_SUCCESS;
 }
@@ -59,15 +78,18 @@ bool cmdUpdateLevelSh(VkCommandBuffer cmd, const VulkanLevelBuffers& buffers, co
   VkDeviceSize offset = 0;
   if (!checkRange(buffers, level, first, count, &offset, error)) return false;
   if (count == 0) return true;
+  std::vector<ShHalf> records;
+  if (!encodeRange(level, first, count, records, error)) return false;
   const VkBuffer buffer = buffers.buffers[kGpuBindingProbes];
   const VkDeviceSize bytes = VkDeviceSize(count) * kShBytes;
 
   // Earlier shader reads before the transfer writes: an execution dependency suffices for write-after-read.
   vkCmdPipelineBarrier(cmd, shaderStages, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 0,
                        nullptr);
-  // Whole probes per chunk (108 bytes each, a multiple of 4 as vkCmdUpdateBuffer requires).
+  // Whole probes per chunk (56 bytes each, a multiple of 4 as vkCmdUpdateBuffer requires; the data is copied
+  // into the command buffer at record time, so `records` may go).
   const VkDeviceSize chunk = kUpdateChunk / kShBytes * kShBytes;
-  const auto* src = reinterpret_cast<const char*>(level.sh.data() + first);
+  const auto* src = reinterpret_cast<const char*>(records.data());
   for (VkDeviceSize done = 0; done < bytes; done += chunk) {
     const VkDeviceSize n = std::min(chunk, bytes - done);
     vkCmdUpdateBuffer(cmd, buffer, offset + done, n, src + done);

@@ -2,6 +2,8 @@
 // declares (host-visible coherent memory, one allocation per buffer).
 #include "tetraprobe/runtime/vulkan_upload.h"
 
+#include "tetraprobe/runtime/sh_half.h"
+
 #include <algorithm>
 #include <climits>
 #include <cstring>
@@ -132,7 +134,16 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   std::vector<char> data[kGpuBindingCount];
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
   appendBytes(data[kGpuBindingProbes], level.probes.data(), level.probes.size());
-  appendBytes(data[kGpuBindingProbes], level.sh.data(), level.sh.size());
+  std::vector<ShHalf> shHalf(level.sh.size());
+  for (size_t p = 0; p < level.sh.size(); ++p)
+    if (!encodeShHalf(level.sh[p], &shHalf[p])) {
+      if (error)
+        *error = "probe " + std::to_string(p) +
+                 " has an SH coefficient that is not finite or beyond half "
+                 "precision's range (|c| > 2.1e9)";
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
+  appendBytes(data[kGpuBindingProbes], shHalf.data(), shHalf.size());
   GpuGridHeader header{};
   for (int i = 0; i < 3; ++i) {
     header.min[i] = grid.min[i];

@@ -94,7 +94,7 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   ASSERT_GT(level.size(), 200u);
   ASSERT_EQ(run("inspect " + good.string()).code, 0);
 
-  const size_t prbs = section(level, "PRBS"), shrg = section(level, "SHRG"), tets = section(level, "TETS"),
+  const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tets = section(level, "TETS"),
                cgr2 = section(level, "CGR2"), kind = section(level, "KIND");
   const uint64_t tetCount = getU64(level, 56);
   ASSERT_GE(tetCount, 4u);
@@ -123,7 +123,7 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
       {"version_99", [](Bytes& b) { putU32(b, 8, 99); }, false},
       {"bad_header_crc", [](Bytes& b) { b[40] ^= 1; }, false},
       {"bad_table_crc", [](Bytes& b) { b[90] ^= 1; }, false},
-      {"bad_payload_crc", [&](Bytes& b) { b[shrg + 5] ^= 1; }, false},
+      {"bad_payload_crc", [&](Bytes& b) { b[shrh + 5] ^= 1; }, false},
       {"header_size", [](Bytes& b) { putU32(b, 12, 96); }, true},
       {"content_flags", [](Bytes& b) { putU32(b, 16, 0xFF); }, true},
       {"sh_order_3", [](Bytes& b) { putU32(b, 20, 3); }, true},
@@ -140,7 +140,14 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
       {"nan_position", [&](Bytes& b) { putU32(b, prbs + 4, 0x7FC00000u); }, true},
       {"inf_position", [&](Bytes& b) { putF32(b, prbs + 8, std::numeric_limits<float>::infinity()); }, true},
       {"huge_position", [&](Bytes& b) { putF32(b, prbs, 1e30f); }, true},
-      {"nan_sh", [&](Bytes& b) { putU32(b, shrg + 12, 0x7FC00000u); }, true},
+      {"nan_sh", [&](Bytes& b) { putU32(b, shrh + 12, 0x7E007E00u); }, true},  // two binary16 NaNs
+      {"inf_sh", [&](Bytes& b) { putU32(b, shrh + 8, 0x00007C00u); }, true},   // +inf, then 0
+      // The probe's scale (binary16 27, high half of the record's last uint) must be a power of two.
+      {"sh_scale_not_power_of_two",
+       [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0x3C010000u); }, true},
+      {"sh_scale_zero", [&](Bytes& b) { putU32(b, shrh + 52, getU32(b, shrh + 52) & 0xFFFFu); }, true},
+      {"sh_scale_negative",
+       [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0xBC000000u); }, true},
       {"vertex_out_of_range", [&](Bytes& b) { putU32(b, tets + 4, 1u << 30); }, true},
       {"vertex_negative", [&](Bytes& b) { putU32(b, tets + 8, uint32_t(-7)); }, true},
       {"vertex_repeated", [&](Bytes& b) { putU32(b, tets + 4, getU32(b, tets)); }, true},

@@ -192,7 +192,7 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
     return uint64_t(0);
   };
   EXPECT_EQ(section("positions"), level.probes.size() * 12);
-  EXPECT_EQ(section("sh"), level.probes.size() * 108);
+  EXPECT_EQ(section("sh"), level.probes.size() * 56);  // ShHalf, as stored and uploaded
   EXPECT_EQ(section("tets"), level.tets.size() * 32);
   EXPECT_EQ(section("cell_grid"), cellGridBytes(query.cellGrid()));
   EXPECT_GT(section("cell_grid"), 0u);

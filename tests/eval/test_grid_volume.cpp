@@ -84,14 +84,14 @@ TEST(GridVolume, InvalidNodesTakeTheNearestValidNode) {
   }
 }
 
-// The equal-bytes grid fits its budget (header + 108 bytes a node), covers the box, and is the finest that
+// The equal-bytes grid fits its budget (header + 56 bytes a node: ShHalf), covers the box, and is the finest that
 // fits: 1 % less spacing goes over.
 TEST(GridLayout, BytesFitTheBudgetAndAreTheFinestThatDo) {
   const glm::dvec3 lo(-7.5, 0.0, -3.0), hi(12.0, 6.5, 9.0);
   for (const uint64_t budget : {uint64_t(5000), uint64_t(123457), uint64_t(820000), uint64_t(6000000)}) {
     const GridLayout l = gridLayoutForBytes(lo, hi, budget);
     EXPECT_LE(l.bytes(), budget);
-    EXPECT_EQ(l.bytes(), kGridHeaderBytes + 108 * l.nodes());
+    EXPECT_EQ(l.bytes(), kGridHeaderBytes + 56 * l.nodes());
     const glm::dvec3 top = l.min + glm::dvec3(l.dims - 1) * l.step;
     for (int a = 0; a < 3; ++a) {
       EXPECT_LE(l.min[a], lo[a] + 1e-6 * l.step);  // covers the box up to rounding
@@ -102,7 +102,7 @@ TEST(GridLayout, BytesFitTheBudgetAndAreTheFinestThatDo) {
     for (int a = 0; a < 3; ++a)
       finer *=
           uint64_t(std::max<int64_t>(2, int64_t(std::ceil((hi[a] - lo[a]) / (0.99 * l.step) - 1e-9)) + 1));
-    EXPECT_GT(kGridHeaderBytes + 108 * finer, budget) << "budget " << budget << ": a finer lattice also fits";
+    EXPECT_GT(kGridHeaderBytes + 56 * finer, budget) << "budget " << budget << ": a finer lattice also fits";
   }
   // At the probe count: at most that many nodes.
   EXPECT_LE(gridLayoutForNodes(lo, hi, 1025).nodes(), 1025u);

@@ -13,6 +13,7 @@
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
 namespace tetraprobe::test {
@@ -43,7 +44,7 @@ inline Level makeLevel() {
         sh.c[3] = glm::vec3(0.1f * p.x, 0.05f, -0.1f * p.z);
         for (int i = 4; i < 9; ++i)
           sh.c[i] = glm::vec3(0.03f * float(i - 6) + 0.01f * p.x, 0.02f * p.y, -0.02f * float(i - 5));
-        level.sh.push_back(sh);
+        level.sh.push_back(quantizeSh(sh));  // as a level file and the GPU hold them: CPU == GPU bit for bit
       }
   const TetMesh mesh = tetrahedralizeDelaunay(world);
   level.tets = buildTetRecords(world, mesh, kOrigin);

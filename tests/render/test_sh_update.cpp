@@ -19,6 +19,7 @@
 #include "point_lookup.h"
 #include "tetraprobe/runtime/probe_update.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
@@ -101,7 +102,7 @@ Level buildLevel(const std::function<ShRgb(size_t, const glm::vec3&)>& sh) {
   level.origin = kOrigin;
   for (size_t p = 0; p < world.size(); ++p) {
     level.probes.emplace_back(world[p] - kOrigin);
-    level.sh.push_back(sh(p, level.probes.back()));
+    level.sh.push_back(quantizeSh(sh(p, level.probes.back())));  // as setProbeSh and a level file store them
   }
   level.tets = buildTetRecords(world, tetrahedralizeDelaunay(world), kOrigin);
   level.occlusion = planeOcclusion(level.tets.size());

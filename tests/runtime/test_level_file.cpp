@@ -16,6 +16,7 @@
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 namespace tetraprobe {
 namespace {
@@ -176,11 +177,11 @@ TEST(LevelFile, RoundTripIsBitExact) {
   ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
-  // The documented size: 80-byte header, six 24-byte table entries and the table's CRC, 120 bytes per
-  // probe, 80 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 24 per
+  // The documented size: 80-byte header, six 24-byte table entries and the table's CRC, 68 bytes per
+  // probe (12 position + 56 half-precision SH), 32 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 24 per
   // node), a 4-byte CRC.
   EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
-            80 + 6 * 24 + 4 + 120 * level.probes.size() + 32 * level.tets.size() + level.generator.size() +
+            80 + 6 * 24 + 4 + 68 * level.probes.size() + 32 * level.tets.size() + level.generator.size() +
                 80 * level.outerCells.size() + 64 + 16 * g.slots.size() + 24 * g.nodes.size() + 4);
 }
 
@@ -400,6 +401,81 @@ TEST(LevelFile, SkipsUnknownOptionalSection) {
   bad[b.size() - 6] ^= 1;
   writeBytes(dir.file("bad.tpb"), bad, bad.size());
   EXPECT_EQ(loadLevel(dir.file("bad.tpb"), back).status, LevelStatus::kCorrupt);
+}
+
+// The file with its SHRH section replaced by SHRG holding `sh` as 108-byte float records (the SH section of
+// levels written before SH were stored in half precision), later sections moved, checksums consistent.
+std::vector<char> withFloatShSection(const std::vector<char>& full, const std::vector<ShRgb>& sh) {
+  const uint32_t n = getU32(full, 72);
+  const size_t tableEnd = 80 + 24 * size_t(n) + 4;
+  std::string floats(sh.size() * sizeof(ShRgb), '\0');
+  std::memcpy(floats.data(), sh.data(), floats.size());  // little-endian f32, as the format stores them
+  std::vector<char> b(full.begin(), full.begin() + long(tableEnd));
+  int64_t shift = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const size_t e = 80 + 24 * size_t(i);
+    const uint64_t offset = getU64(full, e + 8), size = getU64(full, e + 16);
+    putU64(b, e + 8, uint64_t(int64_t(offset) + shift));
+    if (getU32(full, e) == tagOf("SHRH")) {
+      putU32(b, e, tagOf("SHRG"));
+      putU64(b, e + 16, floats.size());
+      b.insert(b.end(), floats.begin(), floats.end());
+      shift += int64_t(floats.size()) - int64_t(size);
+    } else {
+      b.insert(b.end(), full.begin() + long(offset), full.begin() + long(offset + size));
+    }
+  }
+  putU32(b, tableEnd - 4, crc32(b.data() + 80, tableEnd - 4 - 80));
+  b.resize(b.size() + 4);
+  fixPayloadCrc(b);
+  return b;
+}
+
+// saveLevel writes SH in half precision (SHRH, 56 bytes a probe); levels written before, with float SH
+// (SHRG), still load, bit for bit as written; a file holding both is refused.
+TEST(LevelFile, ReadsOldFloatShAndRefusesBothShSections) {
+  TempDir dir;
+  Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("half.tpb"), level));
+  std::vector<ShRgb> floats = level.sh;
+  for (ShRgb& s : floats) s.c[2].y += 1e-5f * s.c[0].x + 3e-7f;  // values no half record holds
+  const std::vector<char> old = withFloatShSection(bytesOf(dir.file("half.tpb")), floats);
+  writeBytes(dir.file("old.tpb"), old, old.size());
+  Level back;
+  const LevelResult r = loadLevel(dir.file("old.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_EQ(back.sh.size(), floats.size());
+  EXPECT_EQ(std::memcmp(back.sh.data(), floats.data(), floats.size() * sizeof(ShRgb)), 0);
+  EXPECT_EQ(back.tets.size(), level.tets.size());
+  // Saved again, the level is written in half precision: the quantized floats.
+  ASSERT_TRUE(saveLevel(dir.file("again.tpb"), back));
+  Level again;
+  ASSERT_TRUE(loadLevel(dir.file("again.tpb"), again));
+  for (size_t p = 0; p < floats.size(); ++p) {
+    const ShRgb want = quantizeSh(floats[p]);
+    EXPECT_EQ(std::memcmp(&again.sh[p], &want, sizeof(ShRgb)), 0) << p;
+  }
+  std::string shData(level.sh.size() * sizeof(ShRgb), '\0');
+  std::memcpy(shData.data(), level.sh.data(), shData.size());
+  const std::vector<char> both = withExtraSection(bytesOf(dir.file("half.tpb")), "SHRG", 1, shData);
+  writeBytes(dir.file("both.tpb"), both, both.size());
+  const LevelResult b = loadLevel(dir.file("both.tpb"), back);
+  EXPECT_EQ(b.status, LevelStatus::kCorrupt);
+  EXPECT_NE(b.message.find("SHRG and SHRH"), std::string::npos) << b.message;
+}
+
+// An SH coefficient beyond what a half-precision record holds (2.1e9 W/(m^2 sr)) is refused at save with a
+// message naming the probe, and nothing is written.
+TEST(LevelFile, RefusesShBeyondHalfPrecisionRange) {
+  TempDir dir;
+  Level level = smallLevel();
+  level.sh[3].c[0].x = 3e9f;
+  const LevelResult r = saveLevel(dir.file("huge.tpb"), level);
+  EXPECT_FALSE(r);
+  EXPECT_NE(r.message.find("probe 3"), std::string::npos) << r.message;
+  EXPECT_FALSE(fs::exists(dir.file("huge.tpb")));
+  level.sh[3].c[0].x = 2e9f;  // within range
+  EXPECT_TRUE(saveLevel(dir.file("big.tpb"), level));
 }
 
 // Levels written before leaves named one tet carry the retired CGRD section (leaves listing up to 8 tets): it

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 #include "tetraprobe/tetra/tetrahedralize.h"
 
@@ -43,7 +44,7 @@ inline Level makeLevel(const std::vector<glm::dvec3>& points, const glm::dvec3& 
     } else {
       for (auto& c : s.c) c = glm::vec3(u(rng), u(rng), u(rng));
     }
-    level.sh.push_back(s);
+    level.sh.push_back(quantizeSh(s));  // as a level file holds them (sh_half.h)
   }
   level.tets = buildTetRecords(points, tetrahedralizeDelaunay(points), origin);
   return level;

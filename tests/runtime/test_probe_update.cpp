@@ -66,6 +66,11 @@ TEST(ProbeUpdate, RejectsNonFiniteWithoutWritingAnything) {
   EXPECT_NE(r.message.find("probe 7 coefficient 6"), std::string::npos) << r.message;
   batch[3].c[6].y = std::numeric_limits<float>::infinity();
   EXPECT_EQ(setProbeSh(level, 4, batch).status, ShUpdateStatus::kNonFinite);
+  // Finite but beyond what the file and the GPU hold (half precision, sh_half.h): refused the same way.
+  batch[3].c[6].y = 3e9f;
+  const ShUpdateResult big = setProbeSh(level, 4, batch);
+  EXPECT_EQ(big.status, ShUpdateStatus::kTooLarge);
+  EXPECT_NE(big.message.find("probe 7 coefficient 6"), std::string::npos) << big.message;
   for (size_t p = 0; p < level.sh.size(); ++p)
     for (int c = 0; c < kShCoeffCount; ++c) EXPECT_EQ(level.sh[p].c[size_t(c)], before[p].c[size_t(c)]);
   EXPECT_TRUE(validateLevel(level));

@@ -61,7 +61,9 @@ int benchRender(int argc, char** argv) {
       "Times, on one G-buffer of the scene's view, GPU passes writing E per pixel: the tet lookup\n"
       "(lighting.comp) in every shader variant that covers the level (the level's own first; ambient =\n"
       "a constant, the floor of a full-screen pass; grid = a regular SH L2 grid over the scene's box, of\n"
-      "at most the tet lookup's bytes at 108 bytes a node (as `eval` sizes its equal-bytes grid), holding\n"
+      "at most the tet lookup's bytes at 56 bytes a node (half-precision SH as a level stores them, as "
+      "`eval`\n"
+      "sizes its equal-bytes grid), holding\n"
       "the level's SH blended at each node, read from seven 3D textures with hardware trilinear filtering).\n"
       "Each time is the median over --frames frames after 2 warm-up frames of Vulkan timestamps around\n"
       "the pass. The goal on lavapipe: the level's lookup_ms <= 1.5 x grid_ms.",
@@ -152,7 +154,8 @@ int benchRender(int argc, char** argv) {
         {"grid",
          {{"dims", {layout.dims.x, layout.dims.y, layout.dims.z}},
           {"step_m", layout.step},
-          {"bytes_at_108_per_node", layout.bytes()},
+          {"node_bytes", kGridNodeBytes},
+          {"bytes", layout.bytes()},
           {"texture_format", r.gridTextureFormat},
           {"texture_bytes", r.gridTextureBytes}}},
         {"tet_lookup_bytes", tetBytes},

@@ -9,6 +9,7 @@
 #include "pipeline.h"
 #include "shard_part.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
@@ -306,7 +307,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
 
   const uint64_t fileBytes = std::filesystem::file_size(out);
   const uint64_t probeBytes = level.probes.size() * sizeof(glm::vec3);
-  const uint64_t shBytes = level.sh.size() * sizeof(ShRgb);
+  const uint64_t shBytes = level.sh.size() * sizeof(ShHalf);  // as stored (runtime/sh_half.h)
   const uint64_t tetBytes = level.tets.size() * sizeof(Tet);
 
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());

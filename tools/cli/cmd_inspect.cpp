@@ -115,8 +115,9 @@ int cmdInspect(int argc, char** argv) {
         gridBytes);
   std::printf("  occlusion  %zu bytes\n", level.occlusion.bytes());
   std::printf("  shader     variant %s\n", variant.c_str());
-  std::printf("  lookup     %llu bytes in memory, %.0f per probe:", (unsigned long long)lookupBytes,
-              double(lookupBytes) / probes);
+  // SH count as stored and uploaded (half precision); the CPU runtime decodes them to floats at load.
+  std::printf("  lookup     %llu bytes on the GPU (the CPU's float SH: +52 per probe), %.0f per probe:",
+              (unsigned long long)lookupBytes, double(lookupBytes) / probes);
   for (const ByteSection& s : sections) std::printf(" %s %.0f", s.name.c_str(), double(s.bytes) / probes);
   std::printf("\n");
   return 0;

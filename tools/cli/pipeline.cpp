@@ -17,6 +17,7 @@
 #include "tetraprobe/eval/refine.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/outer_cells.h"
+#include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/tetra/filler.h"
 #include "tetraprobe/tetra/placement.h"
 #include "tetraprobe/tetra/quality.h"
@@ -407,6 +408,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     stats.finalHoles = left.holePoints;
     timer.mark("check");
   }
+
+  // The SH as the level file and the GPU hold them (half precision, runtime/sh_half.h), so that what the caller
+  // reports and evaluates is what saveLevel writes and loadLevel reads back, bit for bit.
+  for (ShRgb& s : level.sh) s = quantizeSh(s);
 
   if (kinds.size() == level.probes.size()) level.probeKinds = std::move(kinds);
 

@@ -23,12 +23,16 @@
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/runtime/sh.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 namespace tetraprobe {
 
 inline constexpr uint64_t kGridHeaderBytes = 48;  // vec4 min, vec4 step, ivec4 dims (std430)
-inline constexpr uint64_t kGridNodeBytes = sizeof(ShRgb);
-static_assert(kGridNodeBytes == 108, "a grid node is one ShRgb: 27 floats");
+// A node holds its SH as a level holds a probe's (ShHalf, runtime/sh_half.h: 56 bytes), so that at equal bytes
+// the grid gets the same precision per coefficient as the tet level and twice the nodes it would get in float.
+// (Its GPU pass, lighting_grid.comp, reads the decoded floats: its timing is for 108-byte nodes.)
+inline constexpr uint64_t kGridNodeBytes = sizeof(ShHalf);
+static_assert(kGridNodeBytes == 56, "a grid node is one ShHalf");
 
 struct GridLayout {
   glm::dvec3 min{0.0};  // world metres: node (0, 0, 0)

@@ -10,14 +10,16 @@
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/sh.h"
+#include "tetraprobe/runtime/sh_half.h"
 
 namespace tetraprobe {
 
 // Binding TETRAPROBE_BINDING + i of set TETRAPROBE_SET (defaults: set 0, first binding 0).
 enum GpuBinding : uint32_t {
-  kGpuBindingTets = 0,        // TetraprobeTets: Tet[] (32 bytes each)
-  kGpuBindingProbes = 1,      // TetraprobeProbes: positions (3 floats a probe), then SH (27 floats a probe)
-  kGpuBindingGrid = 2,        // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
+  kGpuBindingTets = 0,  // TetraprobeTets: Tet[] (32 bytes each)
+  kGpuBindingProbes =
+      1,                // TetraprobeProbes: positions (3 floats a probe), then SH (ShHalf: 14 uints a probe)
+  kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
   kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
   kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
   kGpuBindingOcclusion =
@@ -30,13 +32,12 @@ static_assert(std::is_standard_layout_v<Tet>);
 static_assert(sizeof(Tet) == 32 && alignof(Tet) == 16, "TetraprobeTet: 32 bytes, std430 array stride 32");
 static_assert(offsetof(Tet, v) == 0 && offsetof(Tet, n) == 16, "TetraprobeTet");
 
-// The probe buffer (uint data[], read as float bits): Level::probes as is (3 floats per probe, x y z, local
-// frame) from index 0, then Level::sh as is from index 3 * probes (tetraprobeProbeCount of the grid header):
-// 27 floats per probe, coefficient-major then r,g,b (index 3 * probes + 27 * probe + 3 * coefficient + channel).
+// The probe buffer (uint data[]): Level::probes as is (3 floats per probe, x y z, local frame) from index 0,
+// then one ShHalf per probe (sh_half.h: 27 binary16 coefficients, coefficient-major then r,g,b, and the
+// probe's power-of-two scale; 14 uints) from index 3 * probes (tetraprobeProbeCount of the grid header).
 inline constexpr int kGpuPositionFloatsPerProbe = 3;
-inline constexpr int kGpuShFloatsPerProbe = 27;
-static_assert(sizeof(ShRgb) == kGpuShFloatsPerProbe * sizeof(float),
-              "TetraprobeSh: 27 packed floats a probe");
+inline constexpr int kGpuShUintsPerProbe = 14;
+static_assert(sizeof(ShHalf) == kGpuShUintsPerProbe * sizeof(uint32_t), "TetraprobeSh: 14 uints a probe");
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "ShRgb's vec3 must be packed (no GLM SIMD alignment)");
 
 // Header of the TetraprobeGrid buffer (48 bytes); the int32 start-tet array follows at offset 48.

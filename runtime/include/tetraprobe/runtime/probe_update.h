@@ -24,6 +24,7 @@ enum class ShUpdateStatus {
   kOk,
   kOutOfRange,  // first + sh.size() > level.probes.size() (or the sum overflows)
   kNonFinite,   // a coefficient is NaN or infinite
+  kTooLarge,    // |coefficient| > kShHalfMaxMagnitude (sh_half.h): beyond what a level file or the GPU holds
   kNotL1,       // the level is L1 (Level::shOrder == 1) and a coefficient 4..8 is not zero
 };
 
@@ -33,13 +34,15 @@ struct ShUpdateResult {
   explicit operator bool() const { return status == ShUpdateStatus::kOk; }
 };
 
-// Replaces level.sh[first + i] with sh[i] for i in [0, sh.size()): incident radiance, W/(m^2 sr), in the
+// Replaces level.sh[first + i] with quantizeSh(sh[i]) (sh_half.h: the values a level file and the GPU hold, so
+// CPU and GPU lookups agree bit for bit) for i in [0, sh.size()): incident radiance, W/(m^2 sr), in the
 // convention of sh.h (9 RGB coefficients, index l*(l+1)+m), one record per probe in probe order (the order of
 // Level::probes and of `tetraprobe export-sh`). `sh` may be empty (a no-op when first <= probe count).
 //
 // Validates everything before writing anything: on any failure the level is unchanged and the result names
 // the first problem. The checks are the ones validateLevel applies to SH (so the level can still be saved):
-// the range lies inside the level, every coefficient is finite, and an L1 level receives no L2 coefficients
+// the range lies inside the level, every coefficient is finite and within half precision's range (about
+// 2.1e9), and an L1 level receives no L2 coefficients
 // (truncate them to zero first, as `bake --sh-order 1` does). Negative radiance is allowed (the L2
 // projection rings). Never throws; allocates nothing; O(sh.size()).
 //
