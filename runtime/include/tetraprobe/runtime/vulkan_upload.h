@@ -34,7 +34,10 @@ struct VulkanLevelBuffers {
 // Creates and fills the buffers of `level` (tets, SH), `grid` (ProbeQuery::startGrid() of a query built
 // on the same level) and `outerCells` (ProbeQuery::outerCells(); may be empty: outside answers are then the
 // clamped hull tet's) and `cellGrid` (ProbeQuery::cellGrid(); may be empty: walks start from the start grid).
-// Positions stay in the level's local frame. An empty level (no tets) gives valid buffers with tetCount 0,
+// Positions stay in the level's local frame. SH are stored as ShHalf (sh_half.h, 56 bytes a probe): a level
+// read by loadLevel or updated by setProbeSh already holds exactly those values, so GPU and CPU lookups agree
+// bit for bit; for SH set by hand, quantizeSh them first to get the same. SH that are not finite or beyond
+// half precision's range (|c| > 2.1e9) fail with VK_ERROR_INITIALIZATION_FAILED. An empty level (no tets) gives valid buffers with tetCount 0,
 // for which the shader returns E = 0. Every index the shader follows (tet probes and neighbours, start tets,
 // one SH per probe) is checked first, O(tets + cells), since the shader reads without bounds checks: any out
 // of range fails with VK_ERROR_INITIALIZATION_FAILED. A buffer over the device's maxStorageBufferRange
@@ -58,9 +61,9 @@ void levelDescriptorBindings(VkShaderStageFlags stages, uint32_t firstBinding,
 void writeLevelDescriptors(VkDevice device, VkDescriptorSet set, uint32_t firstBinding,
                            const VulkanLevelBuffers& buffers);
 
-// Run-time SH updates of an uploaded level (after setProbeSh, probe_update.h, on the CPU copy): both copy
-// level.sh[first, first + count) into the probe buffer (binding + 1) at the offsets gpu_layout.h gives (floats
-// 3 * probes + 27 * probe ...), nothing else. `level` must be the level `buffers` were uploaded from (same
+// Run-time SH updates of an uploaded level (after setProbeSh, probe_update.h, on the CPU copy): both encode
+// level.sh[first, first + count) as ShHalf (sh_half.h) into the probe buffer (binding + 1) at the offsets
+// gpu_layout.h gives (uints 3 * probes + 14 * probe ...), nothing else. `level` must be the level `buffers` were uploaded from (same
 // probe count; checked against the buffer size). Lookups that read the buffer afterwards see the new SH,
 // bit-identical to an upload of a level holding them (tests/render/test_sh_update.cpp).
 //
@@ -74,7 +77,7 @@ VkResult writeLevelSh(VkDevice device, const VulkanLevelBuffers& buffers, const 
                       size_t count, std::string* error = nullptr);
 
 // cmdUpdateLevelSh records the same copy into `cmd` (vkCmdUpdateBuffer, at most 65536 bytes each, so the SH
-// are copied into the command buffer when recorded, 108 bytes a probe: meant for updates of up to some
+// are copied into the command buffer when recorded, 56 bytes a probe: meant for updates of up to some
 // thousands of probes a frame; larger ones are better served by writeLevelSh), between two barriers: reads by
 // `shaderStages` recorded or submitted earlier to the same queue finish before the transfer writes (no
 // write-after-read race with frames in flight), and the writes are visible to reads by `shaderStages`
