@@ -235,10 +235,17 @@ int tetraprobeFindOuterCell(int t, int f) {
              : -1;
 }
 
+// Unit vertex normal i (0..2) of outer cell k.
+vec3 tetraprobeOuterNormal(int k, int i) {
+  return vec3(tetraprobeOuterCells[k].n[3 * i], tetraprobeOuterCells[k].n[3 * i + 1],
+              tetraprobeOuterCells[k].n[3 * i + 2]);
+}
+
 // x strictly beyond the plane of cell k's hull triangle (outward winding).
 bool tetraprobeBeyondHullFace(int k, vec3 x) {
-  vec3 p0 = tetraprobeOuterCells[k].p[0].xyz, p1 = tetraprobeOuterCells[k].p[1].xyz;
-  vec3 p2 = tetraprobeOuterCells[k].p[2].xyz;
+  vec3 p0 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.x);
+  vec3 p1 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.y);
+  vec3 p2 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.z);
   return dot(cross(p1 - p0, p2 - p0), x - p0) > 0.0;
 }
 
@@ -349,10 +356,10 @@ bool tetraprobeSmallestRoot(vec4 coef, float scale, out float t) {
 // outerCellWeights (outer_cells.h): the extrusion t and raw barycentrics of x in cell k (xyz, for v.xyz);
 // `valid` false when no root t >= 0 exists (b is then the projection's, to steer a walk).
 vec3 tetraprobeOuterWeights(int k, vec3 x, out bool valid) {
-  vec3 p0 = tetraprobeOuterCells[k].p[0].xyz, p1 = tetraprobeOuterCells[k].p[1].xyz;
-  vec3 p2 = tetraprobeOuterCells[k].p[2].xyz;
-  vec3 n0 = tetraprobeOuterCells[k].n[0].xyz, n1 = tetraprobeOuterCells[k].n[1].xyz;
-  vec3 n2 = tetraprobeOuterCells[k].n[2].xyz;
+  vec3 p0 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.x);
+  vec3 p1 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.y);
+  vec3 p2 = tetraprobeProbePosition(tetraprobeOuterCells[k].v.z);
+  vec3 n0 = tetraprobeOuterNormal(k, 0), n1 = tetraprobeOuterNormal(k, 1), n2 = tetraprobeOuterNormal(k, 2);
   precise vec3 a = p0 - p2, ad = n0 - n2, b = p1 - p2, bd = n1 - n2, y = x - p2;
   precise vec3 axb = cross(a, b), mixed = cross(a, bd) + cross(ad, b), adxbd = cross(ad, bd);
   precise vec4 c =

@@ -55,10 +55,10 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 2) readonly 
 // opposite v[i] (-1 if none), link.w: the index in the tet's v of the vertex opposite the hull face. Sorted
 // by (hull tet, face).
 struct TetraprobeOuterCell {
-  vec4 p[3];   // offset 0: xyz positions, local frame, metres
-  vec4 n[3];   // offset 48: xyz unit normals
-  ivec4 v;     // offset 96
-  ivec4 link;  // offset 112; 128 bytes in all
+  ivec4 v;       // offset 0: v[0..2] probe indices (positions in TetraprobeProbes), v[3] the hull tet
+  ivec4 link;    // offset 16: link[0..2] the cells across the edges, link[3] the hull tet's face
+  float n[9];    // offset 32: unit vertex normals of v[0..2], x y z each
+  float pad[3];  // offset 68; 80 bytes in all
 };
 
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly buffer TetraprobeOuterCells {

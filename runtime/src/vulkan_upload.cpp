@@ -161,11 +161,7 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
   for (const OuterCell& c : outerCells) {
     GpuOuterCell g{};
     for (int i = 0; i < 3; ++i) {
-      const glm::vec3& p = level.probes[size_t(c.v[i])];
-      for (int a = 0; a < 3; ++a) {
-        g.p[i][a] = p[a];
-        g.n[i][a] = c.normal[i][a];
-      }
+      for (int a = 0; a < 3; ++a) g.n[3 * i + a] = c.normal[i][a];
       g.v[i] = c.v[i];
       g.link[i] = c.n[i];
     }

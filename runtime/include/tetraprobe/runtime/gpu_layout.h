@@ -20,7 +20,7 @@ enum GpuBinding : uint32_t {
   kGpuBindingProbes =
       1,                // TetraprobeProbes: positions (3 floats a probe), then SH (ShHalf: 14 uints a probe)
   kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
-  kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (128 bytes each)
+  kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (80 bytes each)
   kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
   kGpuBindingOcclusion =
       5,  // TetraprobeOcclusion: GpuOcclusionHeader, then uint32 data[] (records, planes, maps)
@@ -64,19 +64,19 @@ struct GpuOuterHeader {
 };
 static_assert(sizeof(GpuOuterHeader) == 16, "TetraprobeOuterCells header: 16 bytes, cells at offset 16");
 
-// One outer cell as the shader reads it: OuterCell (level.h) with its three probe positions copied in, so the
-// extrusion needs no other buffer. GLSL: struct TetraprobeOuterCell { vec4 p[3]; vec4 n[3]; ivec4 v; ivec4
-// link; }.
+// One outer cell as the shader reads it: OuterCell (level.h) as 80 bytes, the same size as on the CPU; the
+// shader reads the three probe positions from the probe buffer by index. GLSL: struct TetraprobeOuterCell
+// { ivec4 v; ivec4 link; float n[9]; float pad[3]; }.
 struct GpuOuterCell {
-  float p[3][4];    // probe positions of v[0..2] (xyz, local frame, metres; w = 0)
-  float n[3][4];    // unit vertex normals (xyz; w = 0)
   int32_t v[4];     // v[0..2]: probe indices (outward winding); v[3]: the hull tet
   int32_t link[4];  // link[0..2]: outer cell across the edge opposite v[i], or -1; link[3]: the tet's face
+  float n[9];       // unit vertex normals of v[0..2], x y z each
+  float pad[3];     // 0
 };
 static_assert(std::is_standard_layout_v<GpuOuterCell>);
-static_assert(sizeof(GpuOuterCell) == 128 && offsetof(GpuOuterCell, n) == 48 &&
-                  offsetof(GpuOuterCell, v) == 96 && offsetof(GpuOuterCell, link) == 112,
-              "TetraprobeOuterCell: std430 array stride 128");
+static_assert(sizeof(GpuOuterCell) == 80 && offsetof(GpuOuterCell, link) == 16 &&
+                  offsetof(GpuOuterCell, n) == 32 && offsetof(GpuOuterCell, pad) == 68,
+              "TetraprobeOuterCell: std430 array stride 80");
 inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
 
 // Header of the TetraprobeCells buffer (32 bytes): the sparse cell grid + BSP of cell_grid.h. The int32
