@@ -39,6 +39,20 @@ NearestProbe::NearestProbe(const Level& level) : level_(level) {
   for (size_t i = 0; i < p.size(); ++i) order_[fill[cellOf[i]]++] = uint32_t(i);
 }
 
+RenderNearest NearestProbe::gpuBuckets() const {
+  RenderNearest g;
+  g.origin = level_.origin;
+  g.min = min_;
+  g.cell = cell_;
+  g.dims = dims_;
+  g.probeCount = level_.probes.size();
+  g.cellStart = cellStart_.data();
+  g.order = order_.data();
+  g.positions = level_.probes.data();
+  g.sh = level_.sh.data();
+  return g;
+}
+
 int32_t NearestProbe::nearest(const glm::vec3& local) const {
   if (level_.probes.empty()) return -1;
   glm::vec3 q = local;

@@ -76,19 +76,9 @@ TEST(NearestRender, GpuPassLightsEachPixelWithTheNearestProbe) {
   mesh.triangles = s.triangles;
   RenderView view = test::floorView(48, 32);
   view.mode = RenderMode::kIrradiance;
-  RenderNearest g;
-  g.origin = level.origin;
-  g.min = buckets.bucketMin();
-  g.cell = buckets.bucketCell();
-  g.dims = buckets.bucketDims();
-  g.probeCount = level.probes.size();
-  g.cellStart = buckets.bucketStart().data();
-  g.order = buckets.bucketOrder().data();
-  g.positions = level.probes.data();
-  g.sh = level.sh.data();
   RenderResult r;
   try {
-    r = renderNearestProbe(mesh, g, view);
+    r = renderNearestProbe(mesh, buckets.gpuBuckets(), view);
   } catch (const std::runtime_error& e) {
     GTEST_SKIP() << "no Vulkan device: " << e.what();
   }

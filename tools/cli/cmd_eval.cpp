@@ -136,18 +136,8 @@ LevelUnderTest prepareLevel(std::shared_ptr<Level> level, const EvalSetup& setup
       };
     } else if (c.method.name == "nearest") {
       auto buckets = std::make_shared<const NearestProbe>(*level);  // the same buckets the CPU method builds
-      c.gpu = [&setup, level, buckets](const RenderView& v) {
-        RenderNearest g;
-        g.origin = level->origin;
-        g.min = buckets->bucketMin();
-        g.cell = buckets->bucketCell();
-        g.dims = buckets->bucketDims();
-        g.probeCount = level->probes.size();
-        g.cellStart = buckets->bucketStart().data();
-        g.order = buckets->bucketOrder().data();
-        g.positions = level->probes.data();
-        g.sh = level->sh.data();
-        return renderNearestProbe(setup.mesh, g, v).timings;
+      c.gpu = [&setup, level, buckets](const RenderView& v) {  // `level` keeps what buckets point at alive
+        return renderNearestProbe(setup.mesh, buckets->gpuBuckets(), v).timings;
       };
     }
     out.candidates.push_back(std::move(c));

@@ -7,6 +7,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/level.h"
 
 namespace tetraprobe {
@@ -17,15 +18,11 @@ class NearestProbe {
   explicit NearestProbe(const Level& level);
   // Index of the probe nearest to a local-frame point (ties: lowest index); -1 for a level with no probes.
   int32_t nearest(const glm::vec3& local) const;
+  // These buckets and the level's probes as renderNearestProbe (render.h) reads them, in the level's local
+  // frame; the pointers are into this object and the level (both must outlive the render).
+  RenderNearest gpuBuckets() const;
   // The bucket grid's memory (bounds, cell size, dims, prefix sums and probe order), bytes; the probes'
   // positions and SH are the level's.
-  // The bucket grid, for the GPU pass (render.h RenderNearest): lower corner (local frame), cell size, cells
-  // per axis, prefix sums (cells + 1) and probe order.
-  const glm::vec3& bucketMin() const { return min_; }
-  float bucketCell() const { return cell_; }
-  const glm::ivec3& bucketDims() const { return dims_; }
-  const std::vector<uint32_t>& bucketStart() const { return cellStart_; }
-  const std::vector<uint32_t>& bucketOrder() const { return order_; }
   uint64_t bytes() const {
     return sizeof(min_) + sizeof(cell_) + sizeof(dims_) +
            (cellStart_.size() + order_.size()) * sizeof(uint32_t);
