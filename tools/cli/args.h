@@ -25,6 +25,11 @@ struct OptionSpec {
   std::string defaultValue;
 };
 
+// Whether `s` ends in `suffix` (exact bytes, case-sensitive).
+inline bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 class Args {
  public:
   // `usage`: "tetraprobe bake SCENE -o LEVEL.tpb [options]"; `summary`: one paragraph.

@@ -291,15 +291,10 @@ std::string markdownTable(const EvalReport& report) {
 
 // Whether --plot FILE asks for a PNG (else SVG); a name ending in neither is a usage error.
 bool plotIsPng(const std::string& file) {
-  auto endsWith = [&](const char* tail) {
-    const std::string t = tail;
-    if (file.size() < t.size()) return false;
-    for (size_t i = 0; i < t.size(); ++i)
-      if (std::tolower(static_cast<unsigned char>(file[file.size() - t.size() + i])) != t[i]) return false;
-    return true;
-  };
-  if (endsWith(".png")) return true;
-  if (endsWith(".svg")) return false;
+  std::string lower = file;  // the ending in any case: .png, .PNG
+  for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (endsWith(lower, ".png")) return true;
+  if (endsWith(lower, ".svg")) return false;
   throw UsageError("--plot FILE must end in .svg or .png, not '" + file + "'");
 }
 

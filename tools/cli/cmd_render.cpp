@@ -28,10 +28,6 @@ namespace tetraprobe::cli {
 
 namespace {
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 // The renderer's modes by name.
 bool gpuMode(const std::string& mode, RenderMode* out) {
   const std::pair<const char*, RenderMode> modes[] = {{"irradiance", RenderMode::kIrradiance},
