@@ -68,6 +68,9 @@ class Cli : public ::testing::Test {
     return p;
   }
   fs::path path(const std::string& name) const { return dir_ / name; }
+  // box.obj (+ .mtl) baked cheaply into l.tpb (16 paths a probe, no noise target: well under a second), for
+  // the eval tests; fails the test when the bake does.
+  void bakeBox();  // defined after kBoxObj and kBoxMtl
   // No file in the directory other than the test's own inputs and captured streams.
   bool onlyInputsLeft(const std::vector<std::string>& inputs) const {
     for (const auto& e : fs::directory_iterator(dir_)) {
@@ -122,6 +125,14 @@ f 11 12 9
 f 10 11 9
 )";
 const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
+
+void Cli::bakeBox() {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
+                          " --samples 16 --noise 0 --threads 2");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+}
 
 }  // namespace
 
@@ -909,11 +920,8 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
 // and the JSON keys the docs name (the box bakes in well under a second; the grid at the probe count is
 // small, and --samples 16 keeps the bake and the reference cheap).
 TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
-  write("box.obj", kBoxObj);
-  write("box.mtl", kBoxMtl);
-  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
-                          " --samples 16 --noise 0 --threads 2");
-  ASSERT_EQ(bake.code, 0) << bake.err;
+  bakeBox();
+  if (HasFatalFailure()) return;
   const CliRun r = run("eval " + path("box.obj").string() + " " + path("l.tpb").string() +
                        " --points 32 --samples 16 --grid both --grid-offsets 2 --gpu none --timing-size "
                        "32x18 --markdown --plot " +
@@ -953,11 +961,8 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
 // --plot FILE.png writes the same chart as a PNG (1840 pixels wide: 2 per SVG unit) that reads back; a name
 // ending in neither .svg nor .png is refused before any work (exit 2, naming the file), writing nothing.
 TEST_F(Cli, EvalPlotsPngByTheNamesEndingAndRefusesOtherNames) {
-  write("box.obj", kBoxObj);
-  write("box.mtl", kBoxMtl);
-  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
-                          " --samples 16 --noise 0 --threads 2");
-  ASSERT_EQ(bake.code, 0) << bake.err;
+  bakeBox();
+  if (HasFatalFailure()) return;
   const std::string base = "eval " + path("box.obj").string() + " " + path("l.tpb").string() +
                            " --points 16 --samples 8 --grid none --gpu none --timing-size 16x9 --plot ";
   const CliRun png = run(base + path("p.PNG").string());
@@ -975,11 +980,8 @@ TEST_F(Cli, EvalPlotsPngByTheNamesEndingAndRefusesOtherNames) {
 // traced them (the CSV's 7 digits change no reported digit here), and a file drawn with another seed is
 // refused (exit 2, naming the mismatch) rather than scored against the wrong points.
 TEST_F(Cli, EvalReferenceInReproducesTheTracedRunAndRefusesOtherPoints) {
-  write("box.obj", kBoxObj);
-  write("box.mtl", kBoxMtl);
-  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
-                          " --samples 16 --noise 0 --threads 2");
-  ASSERT_EQ(bake.code, 0) << bake.err;
+  bakeBox();
+  if (HasFatalFailure()) return;
   const std::string base = "eval " + path("box.obj").string() + " " + path("l.tpb").string() +
                            " --points 32 --samples 16 --grid none --gpu none --timing-size 16x9";
   const CliRun traced = run(base + " --points-out " + path("pts.csv").string());
