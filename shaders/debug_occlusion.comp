@@ -20,7 +20,7 @@ layout(push_constant) uniform DebugPush {
 };
 
 // Legend (render.h, RenderMode::kOcclusion): kind none grey, planes blue, shadow maps green; the fallback
-// (no probe of the tet visible: tetraprobeOccApply's share > 0) red, mixed in by its share from 50 %.
+// (no probe of the tet visible after the face blend: tetraprobeOccApply's share > 0) red, mixed in by its share from 50 %.
 const vec3 kNone = vec3(0.5), kPlanes = vec3(0.15, 0.35, 1.0), kShadowMaps = vec3(0.2, 0.9, 0.25),
            kFallback = vec3(1.0, 0.05, 0.05);
 
@@ -40,7 +40,7 @@ void main() {
     uint kind = tetraprobeOccData[2u * uint(loc.tet)] & 3u;
     c = kind == 1u ? kPlanes : kind == 2u ? kShadowMaps : kNone;
     float fallback = 0.0;
-    tetraprobeOccApply(loc.weights, tetraprobeOccVisibility(loc.tet, p.xyz, n), fallback);
+    tetraprobeOccApply(loc.weights, tetraprobeLookupVisibility(loc, p.xyz, n), fallback);
     if (fallback > 0.0) c = mix(c, kFallback, 0.5 + 0.5 * fallback);
   }
   imageStore(outColor, px, vec4(c * (0.6 + 0.4 * facing), 1.0));

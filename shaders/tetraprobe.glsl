@@ -801,6 +801,73 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
   return s > 0.0 ? o / s : w;
 }
 
+// --- face blend: mirrors runtime/src/face_blend.cpp (faceBlendVisibility; formulas in face_blend.h) ---
+const float TETRAPROBE_FACE_BAND = 0.15, TETRAPROBE_FACE_TRUST = 0.1;
+
+uint tetraprobeOccKind(int t) {
+  return (t >= 0 && uint(t) < tetraprobeOccTetCount) ? (tetraprobeOccData[2u * uint(t)] & 3u) : 0u;
+}
+
+float tetraprobeFaceTrust(vec4 weights, vec4 vis) {  // c: the trust in a side, from its fallback share
+  float fallback;
+  tetraprobeOccApply(weights, vis, fallback);
+  return 1.0 - (1.0 - TETRAPROBE_FACE_TRUST) * clamp(fallback, 0.0, 1.0);
+}
+
+// Tet t's visibility `vis` of its probes at x, blended near each face with the neighbour's visibility of
+// the face's probes, so that both sides of a face use the same numbers.
+vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n) {
+  ivec4 tv = tetraprobeTets[t].v, nbs = tetraprobeTets[t].n;
+  bool ownData = tetraprobeOccKind(t) != 0u;
+  vec4 o = vis;
+  float ownTrust = tetraprobeFaceTrust(weights, vis);
+  for (int k = 0; k < 4; ++k) {
+    int nb = nbs[k];
+    if (!(weights[k] < TETRAPROBE_FACE_BAND) || nb < 0) continue;
+    bool otherData = tetraprobeOccKind(nb) != 0u;
+    if (!otherData) {  // the neighbour sees every probe: nothing to blend where this tet does too
+      bool allSeen = true;
+      for (int i = 0; i < 4; ++i) allSeen = allSeen && (i == k || vis[i] == 1.0);
+      if (!ownData || allSeen) continue;
+    }
+    ivec4 nv = tetraprobeTets[nb].v;
+    precise float d = max(weights[k], 0.0) / TETRAPROBE_FACE_BAND;
+    vec4 other = vec4(1.0);
+    precise float c = ownTrust / (ownTrust + 1.0);
+    if (otherData) {
+      ivec4 nn = tetraprobeTets[nb].n;
+      int m = 0;
+      while (m < 4 && nn[m] != t) ++m;
+      if (m == 4) continue;
+      vec4 w = tetraprobeWeights(nb, x);
+      d = max(d, -w[m] / TETRAPROBE_FACE_BAND);
+      if (!(d < 1.0)) continue;
+      other = tetraprobeOccVisibility(nb, x, n);
+      c = ownTrust / (ownTrust + tetraprobeFaceTrust(w, other));
+    }
+    if (!(d < 1.0)) continue;
+    precise float a = 1.0 - d * d * (3.0 - 2.0 * d);
+    for (int i = 0; i < 4; ++i) {
+      if (i == k) continue;
+      int j = 0;
+      while (j < 4 && nv[j] != tv[i]) ++j;
+      if (j == 4) continue;
+      precise float r = o[i] + a * ((c * vis[i] + (1.0 - c) * other[j]) - vis[i]);
+      o[i] = r;
+    }
+  }
+  return clamp(o, 0.0, 1.0);
+}
+
+// The visibility the lookup uses at located point loc (local x, normal n): its tet's, blended near faces
+// with the neighbours' inside the hull (ProbeQuery::shade).
+vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
+  vec4 vis = tetraprobeOccVisibility(loc.tet, x, n);
+  if (loc.outerCell < 0 && any(lessThan(loc.weights, vec4(TETRAPROBE_FACE_BAND))))
+    vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
+  return vis;
+}
+
 // probeFront (runtime/occlusion.h): per probe of tet t, 1 when it lies in front of the surface at x (rising at
 // least TETRAPROBE_OCC_FRONT_SINE above its plane), 0 on or behind it, linear between; 1 for a zero normal.
 vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
@@ -818,8 +885,9 @@ vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
-// outer cell) outside it; a point that sees none blends into min(blend dominated by the nearest probe in
-// front of the surface, unoccluded blend) per channel. Mirrors
+// outer cell) outside it, blended near faces with the neighbour's (tetraprobeFaceBlendVisibility); a point
+// that sees none blends into min(blend dominated by the nearest probe in front of the surface, unoccluded
+// blend) per channel. Mirrors
 // ProbeQuery::irradiance and occludedIrradiance (runtime/occlusion.h).
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
   TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
@@ -831,8 +899,9 @@ vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
     return tetraprobeShIrradianceVariant(c, normal);
   }
   float fallback = 0.0;
-  if (tetraprobeOccTetCount != 0u)  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
-    w = tetraprobeOccApply(w, tetraprobeOccVisibility(loc.tet, localPos, normal), fallback);
+  if (tetraprobeOccTetCount != 0u) {  // outside the hull too: the hull tet's occlusion (see ProbeQuery)
+    w = tetraprobeOccApply(w, tetraprobeLookupVisibility(loc, localPos, normal), fallback);
+  }
   // The all-occluded fallback's two blends (nearest-dominated p, unoccluded u) come from the same pass over
   // the probes' SH as the occluded one (a GPU may run both sides of the branch below).
   float unused;

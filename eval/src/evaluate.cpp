@@ -19,6 +19,7 @@
 #include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
 
@@ -391,8 +392,10 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
             const Location loc = query->locate(p);
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
             const glm::vec3 local(p - lv->origin);
-            return occludedIrradianceAt(*lv, loc.tet, loc.weights,
-                                        occlusionVisibility(*lv, *occlusion, loc.tet, local, n), local, n);
+            glm::vec4 vis = occlusionVisibility(*lv, *occlusion, loc.tet, local, n);
+            if (loc.outerCell < 0 && nearFace(loc.weights))  // as ProbeQuery::shade (face_blend.h)
+              vis = faceBlendVisibility(*lv, *occlusion, loc.tet, loc.weights, vis, local, n);
+            return occludedIrradianceAt(*lv, loc.tet, loc.weights, vis, local, n);
           }};
 }
 

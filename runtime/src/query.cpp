@@ -15,6 +15,7 @@
 // path-independent.
 #include "tetraprobe/runtime/query.h"
 
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/occlusion.h"
 
 #include "tetraprobe/runtime/outer_cells.h"
@@ -589,10 +590,16 @@ Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   if (level_.tets.empty()) return Location{};
   const glm::dvec3 x = sanitize(world - level_.origin, grid_);
   if (hint >= 0 && size_t(hint) < level_.tets.size()) {
-    // A per-object hint first: its short walk usually ends at once (Unity-style caching).
+    // A per-object hint first: its short walk usually ends at once (Unity-style caching). Its answer is
+    // taken only where no other tet can hold the point (clearly inside: the weights the full locate gives
+    // too); on or near a face, edge or vertex several tets hold it and the occluded, face-blended light of
+    // each differs a little, so the full locate names the one it always names.
     Location loc;
     int32_t exitFace = -1;
-    if (walk(level_.tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace) && exitFace < 0) return loc;
+    if (walk(level_.tets, level_.probes, x, hint, kMaxHintSteps, loc, &exitFace) && exitFace < 0 &&
+        clearlyInside(
+            std::min(std::min(loc.weights.x, loc.weights.y), std::min(loc.weights.z, loc.weights.w))))
+      return loc;
   }
   return gridLocate(x);
 }
@@ -658,6 +665,10 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
                 ? occlusionVisibility(level_, level_.occlusion, loc.tet, *frame, local, normal)
                 : glm::vec4(1.0f);  // a tet storing nothing: every probe visible
     }
+    // Near a face, blended with the neighbour's visibility of the face's probes, so that the two tets' data
+    // leave no seam (face_blend.h); not outside the hull, where the outer cell's weights are not the tet's.
+    if (loc.outerCell < 0 && nearFace(loc.weights))
+      vis = faceBlendVisibility(level_, level_.occlusion, loc.tet, loc.weights, vis, local, normal);
     float fallback = 0.0f;
     weights = applyOcclusion(weights, vis, &fallback);
     if (fallback > 0.0f) return occludedIrradianceAt(level_, loc.tet, loc.weights, vis, local, normal);

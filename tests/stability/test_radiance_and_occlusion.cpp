@@ -2,6 +2,7 @@
 // exactly through probes, and the seam the per-tet occlusion data can leave on a face two tets share.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -13,6 +14,7 @@
 #include "stability_checks.h"
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/occlusion.h"
 
 namespace tetraprobe {
@@ -200,17 +202,19 @@ TEST(Stability, WallThroughProbesGivesFiniteNormalizedAnswers) {
 // above. At random points of every interior face where either tet stores occlusion, at least 0.1 m from the
 // wall (the wall itself is a true edge of the lighting), the irradiance with occlusion is compared 1e-6 m
 // either side of the face, for volume points (zero normal) and surface-like normals along the wall's.
-// Continuity inside one tet holds by construction (smooth visibility); across faces each tet has its own
-// planes (fitted to its own clipped geometry and samples), cell masks and falloff band (in units of its own
-// largest probe distance), and a tet the wall misses stores nothing, so the two sides need not agree.
-// MEASURED SEAM (not fixed here; the cause is the per-tet representation, docs/stability.md): largest jump
-// 0.82 of the lit irradiance, 219 of 4,014 face points above 1e-3 (recorded as largest_seam and
-// seams_above_1e-3). The slopes explain at most ~1e-6 of it. No guard exists yet: the bounds below are
-// today's figures with a margin, a regression check until a fix (data agreeing on shared faces) lets them
-// shrink to the kRelRange the plain interpolation meets.
-constexpr double kSeamTolerance = 0.9;
-constexpr size_t kSeamPointsAbove = 260;
-TEST(Stability, OcclusionSeamAcrossSharedFacesIsMeasured) {
+// Each tet's data is fitted on its own (its own planes, cell masks, falloff band), so two tets sharing a
+// face disagree on which of its probes a point sees: 0.82 of the lit irradiance at most, 219 of 4,014
+// points above 1e-3, before the face blend.
+// GUARD: faceBlendVisibility (runtime/face_blend.h), which gives both sides the same visibility of the
+// face's probes. Away from the face's edges (every face barycentric at least kFaceBlendBand) only the two
+// tets blend and the jump is float rounding (measured below 1e-5; bound 1e-4: weights from two float
+// frames, through the planes' smoothstep of half-width 0.02, slope <= 75). Within the band of an edge the
+// tets around the edge that are not face neighbours are not consulted: measured largest 0.46 there, 12 of
+// 4,014 points above 1e-3; bounded as a regression check. Removing the guard fails the first bound.
+constexpr double kSeamInteriorTolerance = 1e-4;
+constexpr double kSeamEdgeTolerance = 0.5;
+constexpr size_t kSeamPointsAbove = 20;
+TEST(Stability, OcclusionIsContinuousAcrossSharedFaces) {
   Scene scene = test::emptyScene();
   const glm::vec3 wn = glm::normalize(glm::vec3(0.3f, 0.2f, 1.0f)), c(1.5f, 1.5f, 1.45f);
   const glm::vec3 tu = glm::normalize(glm::cross(wn, glm::vec3(1, 0, 0))), tv = glm::cross(wn, tu);
@@ -227,8 +231,8 @@ TEST(Stability, OcclusionSeamAcrossSharedFacesIsMeasured) {
   const ProbeQuery query(level);
   std::mt19937_64 rng(22);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  double largest = 0.0;
-  size_t faces = 0, points = 0, above = 0;
+  double interior = 0.0, edge = 0.0;
+  size_t faces = 0, interiorPoints = 0, edgePoints = 0, above = 0;
   glm::dvec3 worstAt(0.0);
   for (size_t ti = 0; ti < level.tets.size(); ++ti) {
     const Tet& t = level.tets[ti];
@@ -247,28 +251,37 @@ TEST(Stability, OcclusionSeamAcrossSharedFacesIsMeasured) {
         if (b0 + b1 > 1.0) b0 = 1.0 - b0, b1 = 1.0 - b1;
         const glm::dvec3 x = a * b0 + b * b1 + cc * (1.0 - b0 - b1);
         if (std::abs(side(x)) < 0.1) continue;
+        const bool nearEdge = std::min({b0, b1, 1.0 - b0 - b1}) < double(kFaceBlendBand);
         for (const glm::vec3& sn : {glm::vec3(0.0f), wn, -wn}) {
           const glm::vec3 e0 = query.irradiance(level.origin + x - 1e-6 * n, sn);
           const glm::vec3 e1 = query.irradiance(level.origin + x + 1e-6 * n, sn);
           ASSERT_TRUE(std::isfinite(e0.x) && std::isfinite(e1.x));
           const double jump = stability::maxAbs(e1 - e0);  // lit irradiance is 1 W/m^2
-          ++points;
           above += jump > 1e-3;
-          if (jump > largest) largest = jump, worstAt = x;
+          if (nearEdge) {
+            ++edgePoints;
+            edge = std::max(edge, jump);
+          } else {
+            ++interiorPoints;
+            if (jump > interior) interior = jump, worstAt = x;
+          }
         }
       }
     }
   }
   std::printf(
-      "[occlusion seam] %zu tets (%zu with data), %zu faces, %zu points: largest jump %.4g at %s, %zu "
-      "above 1e-3 (relative to the lit irradiance)\n",
-      level.tets.size(), st.planeTets + st.shadowMapTets, faces, points, largest,
-      stability::where(worstAt).c_str(), above);
-  RecordProperty("largest_seam", std::to_string(largest));
+      "[occlusion seam] %zu tets (%zu with data), %zu faces: largest jump %.3g on %zu points away from "
+      "edges (at %s), %.3g on %zu points within the band of an edge; %zu above 1e-3 (relative to the lit "
+      "irradiance)\n",
+      level.tets.size(), st.planeTets + st.shadowMapTets, faces, interior, interiorPoints,
+      stability::where(worstAt).c_str(), edge, edgePoints, above);
+  RecordProperty("largest_seam_away_from_edges", std::to_string(interior));
+  RecordProperty("largest_seam_near_edges", std::to_string(edge));
   RecordProperty("seams_above_1e-3", std::to_string(above));
-  RecordProperty("seam_points", std::to_string(points));
-  EXPECT_GT(points, 100u);
-  EXPECT_LE(largest, kSeamTolerance);
+  EXPECT_GT(interiorPoints, 100u);
+  EXPECT_GT(edgePoints, 100u);
+  EXPECT_LE(interior, kSeamInteriorTolerance);
+  EXPECT_LE(edge, kSeamEdgeTolerance);
   EXPECT_LE(above, kSeamPointsAbove);
 }
 

@@ -61,6 +61,10 @@ class ProbeQuery {
   // Slivers that are positively oriented in float are answered exactly, whatever their condition number
   // (tests/stability: up to 1e12).
   //
+  // The hint changes the speed, not the answer: its walk is taken only where it ends clearly inside a tet
+  // (every weight at least 1e-4), where no other tet holds the point; otherwise the point is located as
+  // without it.
+  //
   // Without a hint (or when the hint's short walk fails or leaves the hull) the start tet is the one the
   // sparse cell grid's BSP leaf names (cell_grid.h), which holds the point but within rounding of its faces;
   // a point whose cell is absent, or whose leaf is empty, starts from the coarse start grid and ends in the
@@ -78,7 +82,8 @@ class ProbeQuery {
   Location bruteForceLocate(const glm::dvec3& world) const;
 
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
-  // given it is read as the walk's starting hint and updated with the tet found (per-object caching).
+  // given it is read as the walk's starting hint and updated with the tet found (per-object caching); the
+  // answer is the same, bit for bit, as without it.
   // The level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point cannot see:
   // w = applyOcclusion(weights, occlusionVisibility(level, occlusion, tet, local, normal)), the normal biasing
   // the point off its surface (a zero normal: no bias). Outside the hull `tet` is the outer cell's hull tet,
