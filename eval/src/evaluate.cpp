@@ -392,9 +392,8 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
             const Location loc = query->locate(p);
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
             const glm::vec3 local(p - lv->origin);
-            glm::vec4 vis = occlusionVisibility(*lv, *occlusion, loc.tet, local, n);
-            if (loc.outerCell < 0 && nearFace(loc.weights))  // as ProbeQuery::shade (face_blend.h)
-              vis = faceBlendVisibility(*lv, *occlusion, loc.tet, loc.weights, vis, local, n);
+            const glm::vec4 vis =
+                lookupVisibility(*lv, *occlusion, loc.tet, loc.weights, loc.outerCell < 0, local, n);
             return occludedIrradianceAt(*lv, loc.tet, loc.weights, vis, local, n);
           }};
 }

@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh.h"
@@ -61,8 +62,17 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
     std::printf("explain: inside tet %d\n", loc.tet);
   std::printf("  occlusion: %s\n", occlusionKindText(level, loc.tet));
   const glm::vec3 local(world - level.origin);
-  const glm::vec4 vis = query.usesOcclusion() ? occlusionVisibility(level, level.occlusion, loc.tet, local, n)
+  // What the answer uses: the tet's data blended near faces with its neighbours' (face_blend.h).
+  const glm::vec4 own = query.usesOcclusion() ? occlusionVisibility(level, level.occlusion, loc.tet, local, n)
                                               : glm::vec4(1.0f);
+  const glm::vec4 vis = query.usesOcclusion() ? lookupVisibility(level, level.occlusion, loc.tet, loc.weights,
+                                                                 loc.outerCell < 0, local, n)
+                                              : glm::vec4(1.0f);
+  if (vis != own)
+    std::printf(
+        "  face blend: near a face the visibility below is blended with the neighbour's (the tet's data "
+        "alone: %.3f %.3f %.3f %.3f)\n",
+        own.x, own.y, own.z, own.w);
   float fallback = 0.0f;
   const glm::vec4 occluded = applyOcclusion(loc.weights, vis, &fallback);
   // The rays column only with a tracer, so the rows read the same as before without one.
