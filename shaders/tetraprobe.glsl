@@ -731,13 +731,18 @@ float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's 
   return r;
 }
 
-// Per-probe visibility of tet t's probes from local point x with surface normal n (occlusionVisibility).
-vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
+// The occlusion kind tet t stores (0 none, 1 planes, 2 shadow maps; 0 past the records).
+uint tetraprobeOccKind(int t) {
+  return (t >= 0 && uint(t) < tetraprobeOccTetCount) ? (tetraprobeOccData[2u * uint(t)] & 3u) : 0u;
+}
+
+// Per-probe visibility of tet t's probes from local point x with surface normal n, `frame` being t's
+// tetraprobeBaryFrame (occlusionVisibility with the frame given).
+vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, vec3 n) {
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
   uint header = tetraprobeOccData[2u * uint(t)], cells = tetraprobeOccData[2u * uint(t) + 1u];
   uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
   if (!(kind == 1u && tetraprobeUsePlanes) && !(kind == 2u && tetraprobeUseShadowMaps)) return vec4(1.0);
-  TetraprobeBaryFrame frame = tetraprobeBaryFrame(t);
   vec4 w = tetraprobeBaryWeights(frame, x);
   if (isnan(n.x) || isnan(n.y) || isnan(n.z) || isinf(n.x) || isinf(n.y) || isinf(n.z)) n = vec3(0.0);
   w = tetraprobeOccBias(frame, w, n);
@@ -782,6 +787,12 @@ vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
   return vis;
 }
 
+// Per-probe visibility of tet t's probes from local point x with surface normal n (occlusionVisibility).
+vec4 tetraprobeOccVisibility(int t, vec3 x, vec3 n) {
+  if (tetraprobeOccKind(t) == 0u) return vec4(1.0);
+  return tetraprobeOccVisibilityInFrame(t, tetraprobeBaryFrame(t), x, n);
+}
+
 // applyOcclusion: weights * visibility renormalized (the sanitized weights when nothing is visible);
 // `fallback` = the fallback's share, 1 - s / TETRAPROBE_OCC_FALLBACK below it, else 0.
 vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
@@ -803,10 +814,6 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
 
 // --- face blend: mirrors runtime/src/face_blend.cpp (faceBlendVisibility; formulas in face_blend.h) ---
 const float TETRAPROBE_FACE_BAND = 0.15, TETRAPROBE_FACE_TRUST = 0.1;
-
-uint tetraprobeOccKind(int t) {
-  return (t >= 0 && uint(t) < tetraprobeOccTetCount) ? (tetraprobeOccData[2u * uint(t)] & 3u) : 0u;
-}
 
 float tetraprobeFaceTrust(vec4 weights, vec4 vis) {  // c: the trust in a side, from its fallback share
   float fallback;
@@ -839,10 +846,11 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
       int m = 0;
       while (m < 4 && nn[m] != t) ++m;
       if (m == 4) continue;
-      vec4 w = tetraprobeWeights(nb, x);
+      TetraprobeBaryFrame f = tetraprobeBaryFrame(nb);
+      vec4 w = tetraprobeBaryWeights(f, x);
       d = max(d, -w[m] / TETRAPROBE_FACE_BAND);
       if (!(d < 1.0)) continue;
-      other = tetraprobeOccVisibility(nb, x, n);
+      other = tetraprobeOccVisibilityInFrame(nb, f, x, n);
       c = ownTrust / (ownTrust + tetraprobeFaceTrust(w, other));
     }
     if (!(d < 1.0)) continue;
