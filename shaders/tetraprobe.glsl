@@ -812,13 +812,41 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
   return s > 0.0 ? o / s : w;
 }
 
-// --- face blend: mirrors runtime/src/face_blend.cpp (faceBlendVisibility; formulas in face_blend.h) ---
-const float TETRAPROBE_FACE_BAND = 0.15, TETRAPROBE_FACE_TRUST = 0.1;
+// probeFront (runtime/occlusion.h): per probe of tet t, 1 when it lies in front of the surface at x (rising at
+// least TETRAPROBE_OCC_FRONT_SINE above its plane), 0 on or behind it, linear between; 1 for a zero normal.
+vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
+  ivec4 v = tetraprobeTets[t].v;
+  vec4 front = vec4(1.0);
+  float nl = length(n);
+  for (int i = 0; i < 4; ++i) {
+    precise vec3 d = tetraprobeProbePosition(v[i]) - x;
+    precise float scale = TETRAPROBE_OCC_FRONT_SINE * length(d) * nl;
+    precise float f = tetraprobeDot(d, n) / scale;
+    if (scale > 0.0 && !isnan(f) && !isinf(f)) front[i] = clamp(f, 0.0, 1.0);
+  }
+  return front;
+}
 
-float tetraprobeFaceTrust(vec4 weights, vec4 vis) {  // c: the trust in a side, from its fallback share
-  float fallback;
-  tetraprobeOccApply(weights, vis, fallback);
-  return 1.0 - (1.0 - TETRAPROBE_FACE_TRUST) * clamp(fallback, 0.0, 1.0);
+// --- face blend: mirrors runtime/src/face_blend.cpp (faceBlendVisibility; formulas in face_blend.h) ---
+const float TETRAPROBE_FACE_BAND = 0.15, TETRAPROBE_FACE_TRUST = 0.1, TETRAPROBE_FACE_FALLBACK_BAND = 0.3,
+            TETRAPROBE_FACE_BLIND_SUM = 0.05;
+
+// How blind a side is by its own visibility: 1 - smoothstep(0, TETRAPROBE_FACE_BLIND_SUM, visible sum).
+float tetraprobeFaceBlindness(vec4 weights, vec4 vis) {
+  precise float sumW = 0.0, sumWV = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    float w = (!isnan(weights[i]) && !isinf(weights[i]) && weights[i] > 0.0) ? weights[i] : 0.0;
+    float v = (!isnan(vis[i]) && !isinf(vis[i])) ? clamp(vis[i], 0.0, 1.0) : 1.0;
+    sumW = sumW + w;
+    sumWV = sumWV + w * v;
+  }
+  if (!(sumW > 0.0) || isinf(sumW)) return 0.0;
+  precise float t = clamp(sumWV / sumW / TETRAPROBE_FACE_BLIND_SUM, 0.0, 1.0);
+  precise float r = 1.0 - t * t * (3.0 - 2.0 * t);
+  return r;
+}
+float tetraprobeFaceTrust(float blind) {  // c: the trust in a side
+  return 1.0 - (1.0 - TETRAPROBE_FACE_TRUST) * blind;
 }
 
 // Tet t's visibility `vis` of its probes at x, blended near each face with the neighbour's visibility of
@@ -827,10 +855,14 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   ivec4 tv = tetraprobeTets[t].v, nbs = tetraprobeTets[t].n;
   bool ownData = tetraprobeOccKind(t) != 0u;
   vec4 o = vis;
-  float ownTrust = tetraprobeFaceTrust(weights, vis);
+  float ownBlind = tetraprobeFaceBlindness(weights, vis);
+  float ownTrust = tetraprobeFaceTrust(ownBlind);
+  precise float band = TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * ownBlind;
+  // A probe behind the surface is not raised above the lower side's visibility (unless a side sees nothing).
+  vec4 front = tetraprobeProbeFront(t, x, n);
   for (int k = 0; k < 4; ++k) {
     int nb = nbs[k];
-    if (!(weights[k] < TETRAPROBE_FACE_BAND) || nb < 0) continue;
+    if (!(weights[k] < band) || nb < 0) continue;
     bool otherData = tetraprobeOccKind(nb) != 0u;
     if (!otherData) {  // the neighbour sees every probe: nothing to blend where this tet does too
       bool allSeen = true;
@@ -838,8 +870,9 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
       if (!ownData || allSeen) continue;
     }
     ivec4 nv = tetraprobeTets[nb].v;
-    precise float d = max(weights[k], 0.0) / TETRAPROBE_FACE_BAND;
+    precise float d = max(weights[k], 0.0) / band;
     vec4 other = vec4(1.0);
+    float otherBlind = 0.0;
     precise float c = ownTrust / (ownTrust + 1.0);
     if (otherData) {
       ivec4 nn = tetraprobeTets[nb].n;
@@ -848,19 +881,23 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
       if (m == 4) continue;
       TetraprobeBaryFrame f = tetraprobeBaryFrame(nb);
       vec4 w = tetraprobeBaryWeights(f, x);
-      d = max(d, -w[m] / TETRAPROBE_FACE_BAND);
+      d = max(d, -w[m] / band);
       if (!(d < 1.0)) continue;
       other = tetraprobeOccVisibilityInFrame(nb, f, x, n);
-      c = ownTrust / (ownTrust + tetraprobeFaceTrust(w, other));
+      otherBlind = tetraprobeFaceBlindness(w, other);
+      c = ownTrust / (ownTrust + tetraprobeFaceTrust(otherBlind));
     }
     if (!(d < 1.0)) continue;
     precise float a = 1.0 - d * d * (3.0 - 2.0 * d);
+    float anyBlind = max(ownBlind, otherBlind);
     for (int i = 0; i < 4; ++i) {
       if (i == k) continue;
       int j = 0;
       while (j < 4 && nv[j] != tv[i]) ++j;
       if (j == 4) continue;
-      precise float r = o[i] + a * ((c * vis[i] + (1.0 - c) * other[j]) - vis[i]);
+      precise float target =
+          min(c * vis[i] + (1.0 - c) * other[j], max(max(min(vis[i], other[j]), front[i]), anyBlind));
+      precise float r = o[i] + a * (target - vis[i]);
       o[i] = r;
     }
   }
@@ -871,25 +908,10 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
 // with the neighbours' inside the hull (ProbeQuery::shade).
 vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
   vec4 vis = tetraprobeOccVisibility(loc.tet, x, n);
-  if (loc.outerCell < 0 && any(lessThan(loc.weights, vec4(TETRAPROBE_FACE_BAND))))
-    vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
+  if (loc.outerCell < 0) vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
   return vis;
 }
 
-// probeFront (runtime/occlusion.h): per probe of tet t, 1 when it lies in front of the surface at x (rising at
-// least TETRAPROBE_OCC_FRONT_SINE above its plane), 0 on or behind it, linear between; 1 for a zero normal.
-vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
-  ivec4 v = tetraprobeTets[t].v;
-  vec4 front = vec4(1.0);
-  float nl = length(n);
-  for (int i = 0; i < 4; ++i) {
-    vec3 d = tetraprobeProbePosition(v[i]) - x;
-    float scale = TETRAPROBE_OCC_FRONT_SINE * length(d) * nl;
-    float f = dot(d, n) / scale;
-    if (scale > 0.0 && !isnan(f) && !isinf(f)) front[i] = clamp(f, 0.0, 1.0);
-  }
-  return front;
-}
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the

@@ -15,10 +15,26 @@ inline OcclusionKind kindOf(const LevelOcclusion& occlusion, int32_t tet) {
   return size_t(tet) < occlusion.tets.size() ? occlusion.tets[size_t(tet)].kind() : kOcclusionNone;
 }
 
-// c of the header: the trust in a tet's visibility at a point where, by that visibility alone, the
-// all-occluded fallback has share f.
-inline float trust(float fallback) {
-  return 1.0f - (1.0f - kFaceBlendFallbackTrust) * std::clamp(fallback, 0.0f, 1.0f);
+// How blind a side is at the point by its own visibility: 1 - smoothstep(0, kFaceBlendBlindSum, s) with s
+// the visible weight sum applyOcclusion computes (weights sanitized and normalized, visibility clamped): 1
+// where it sees none of its probes, 0 from s = kFaceBlendBlindSum on. Gentler than the fallback's share
+// (1 - s / 0.01), so float rounding of s moves the band, cap and trust it drives five times less.
+inline float blindness(const glm::vec4& weights, const glm::vec4& visibility) {
+  float sumW = 0.0f, sumWV = 0.0f;
+  for (int i = 0; i < 4; ++i) {
+    const float w = std::isfinite(weights[i]) && weights[i] > 0.0f ? weights[i] : 0.0f;
+    const float v = std::isfinite(visibility[i]) ? std::clamp(visibility[i], 0.0f, 1.0f) : 1.0f;
+    sumW += w;
+    sumWV += w * v;
+  }
+  if (!(sumW > 0.0f) || !std::isfinite(sumW)) return 0.0f;
+  const float t = std::clamp(sumWV / sumW / kFaceBlendBlindSum, 0.0f, 1.0f);
+  return 1.0f - t * t * (3.0f - 2.0f * t);
+}
+
+// c of the header: the trust in a side of blindness b.
+inline float trust(float blind) {
+  return 1.0f - (1.0f - kFaceBlendFallbackTrust) * blind;
 }
 
 }  // namespace
@@ -29,12 +45,17 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
   const Tet& t = level.tets[size_t(tet)];
   const bool ownData = kindOf(occlusion, tet) != kOcclusionNone;
   glm::vec4 out = visibility;
-  float ownFallback = 0.0f;
-  applyOcclusion(weights, visibility, &ownFallback);
-  const float ownTrust = trust(ownFallback);
+  const float ownBlind = blindness(weights, visibility);
+  const float ownTrust = trust(ownBlind);
+  const float band = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) * ownBlind;
+  // A probe behind the surface (probeFront) is never seen from it: the neighbour may not raise its visibility
+  // above the lower of the two sides' (a symmetric cap, so both sides still agree on the face).
+  glm::vec3 toProbe[4];
+  for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
+  const glm::vec4 front = probeFront(toProbe, normal);
   for (int k = 0; k < 4; ++k) {
     const int32_t nb = t.n[k];
-    if (!(weights[k] < kFaceBlendBand) || nb < 0 || size_t(nb) >= level.tets.size()) continue;
+    if (!(weights[k] < band) || nb < 0 || size_t(nb) >= level.tets.size()) continue;
     const bool otherData = kindOf(occlusion, nb) != kOcclusionNone;
     if (!otherData) {
       // The neighbour sees every probe (trust 1): nothing to blend where this tet does too.
@@ -43,8 +64,9 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
       if (!ownData || allSeen) continue;
     }
     const Tet& tn = level.tets[size_t(nb)];
-    float x = std::max(weights[k], 0.0f) / kFaceBlendBand;
+    float x = std::max(weights[k], 0.0f) / band;
     glm::vec4 other(1.0f);
+    float otherBlind = 0.0f;
     float c = ownTrust / (ownTrust + 1.0f);
     if (otherData) {
       int m = 0;
@@ -52,21 +74,24 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
       if (m == 4) continue;
       const BaryFrame frame = baryFrame(tn, level.probes);
       const glm::vec4 w = baryWeights(frame, local);
-      x = std::max(x, -w[m] / kFaceBlendBand);
+      x = std::max(x, -w[m] / band);
       if (!(x < 1.0f)) continue;  // beyond the band, or not finite
       other = occlusionVisibility(level, occlusion, nb, frame, local, normal);
-      float otherFallback = 0.0f;
-      applyOcclusion(w, other, &otherFallback);
-      c = ownTrust / (ownTrust + trust(otherFallback));
+      otherBlind = blindness(w, other);
+      c = ownTrust / (ownTrust + trust(otherBlind));
     }
     if (!(x < 1.0f)) continue;
     const float a = 1.0f - x * x * (3.0f - 2.0f * x);
+    const float anyBlind = std::max(ownBlind, otherBlind);
     for (int i = 0; i < 4; ++i) {
       if (i == k) continue;
       int j = 0;
       while (j < 4 && tn.v[j] != t.v[i]) ++j;
       if (j == 4) continue;
-      out[i] += a * ((c * visibility[i] + (1.0f - c) * other[j]) - visibility[i]);
+      const float target =
+          std::min(c * visibility[i] + (1.0f - c) * other[j],
+                   std::max(std::max(std::min(visibility[i], other[j]), front[i]), anyBlind));
+      out[i] += a * (target - visibility[i]);
     }
   }
   return glm::clamp(out, 0.0f, 1.0f);
@@ -77,7 +102,7 @@ glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, 
                            const glm::vec3& normal) {
   if (occlusion.empty() || tet < 0 || size_t(tet) >= level.tets.size()) return glm::vec4(1.0f);
   const glm::vec4 vis = occlusionVisibility(level, occlusion, tet, local, normal);
-  if (!insideHull || !nearFace(weights)) return vis;
+  if (!insideHull) return vis;
   return faceBlendVisibility(level, occlusion, tet, weights, vis, local, normal);
 }
 

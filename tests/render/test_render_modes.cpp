@@ -364,8 +364,9 @@ TEST(DebugViews, TetColourFollowsTheTetHoldingThePixel) {
 }
 
 // Occlusion: every tet gets a record by t % 4: none; one plane with every probe visible on both sides;
-// shadow maps that meet nothing; one plane with no probe visible on either side (every point falls back,
-// but within the face blend's band of a face). Each pixel shows its tet's kind: grey, blue, green, red.
+// shadow maps that meet nothing; one plane with no probe visible on either side. Each pixel shows its tet's
+// kind: grey, blue, green; the last kind falls back (red) where its neighbours see nothing either (the face
+// blend takes their sight otherwise), so it is checked on a level where every tet sees nothing.
 TEST(DebugViews, OcclusionShowsKindAndFallback) {
   Level level = makeLevel(true);
   LevelOcclusion& occ = level.occlusion;
@@ -396,8 +397,9 @@ TEST(DebugViews, OcclusionShowsKindAndFallback) {
     if (wMin < 1e-3f) continue;  // a float tie may name the neighbour
     const glm::vec3 c = px3(r.color, i);
     const size_t k = size_t(loc.tet) % 4;
-    // Within the face blend's band a tet that sees nothing takes its neighbours' sight (face_blend.h).
-    if (k == 3 && wMin < kFaceBlendBand) continue;
+    // A tet that sees nothing takes its neighbours' sight across its faces (face_blend.h, a band of
+    // kFaceBlendFallbackBand, the whole tet): checked below with every tet seeing nothing.
+    if (k == 3) continue;
     const bool ok = k == 0   ? c.r == c.g && c.g == c.b
                     : k == 1 ? c.b > 2.0f * c.r && c.b > 2.0f * c.g
                     : k == 2 ? c.g > 3.0f * c.r && c.g > 3.0f * c.b
@@ -407,7 +409,25 @@ TEST(DebugViews, OcclusionShowsKindAndFallback) {
       ADD_FAILURE() << "pixel " << i << " in tet " << loc.tet << " (kind " << k << "): colour " << c.r << " "
                     << c.g << " " << c.b;
   }
-  for (int k = 0; k < 4; ++k) EXPECT_GT(seen[k], 50) << "kind " << k;
+  for (int k = 0; k < 3; ++k) EXPECT_GT(seen[k], 50) << "kind " << k;
+  // Every tet with one plane and no probe visible on either side: no neighbour sees anything either, so
+  // every pixel falls back and shows red.
+  occ.shadowMaps.clear();
+  occ.planes.clear();
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    occ.tets[t] = makeTetOcclusion(kOcclusionPlanes, 1, uint32_t(t), 0x00u);
+    occ.planes.push_back(makeOcclusionPlane(1.0, -1.0, 0.0, 0.0));
+  }
+  ASSERT_TRUE(validateLevel(level)) << validateLevel(level).message;
+  RENDER_OR_SKIP(makeMesh(), level, makeView(RenderMode::kOcclusion, 161), RenderOptions{}, r);
+  int red = 0, other = 0;
+  for (size_t i = 0; i < r.color.rgba.size() / 4; ++i) {
+    if (r.position.rgba[4 * i + 3] == 0.0f) continue;
+    const glm::vec3 c = px3(r.color, i);
+    (c.r > 5.0f * c.g && c.r > 5.0f * c.b ? red : other)++;
+  }
+  EXPECT_GT(red, 1000);
+  EXPECT_EQ(other, 0);
 }
 
 // Every pass of the mode has a GPU time, the median over the timed frames, in the order the frame runs them.

@@ -100,6 +100,37 @@ TEST(FaceBlend, NothingChangesBeyondTheBandOnHullFacesOrBetweenTetsWithoutData) 
   for (int i = 0; i < 4; ++i) EXPECT_EQ(outNone[i], 1.0f);
 }
 
+// A tet whose own data hides all four probes (it falls back) looks for light its neighbour sees deeper in:
+// the band widens with its fallback share to kFaceBlendFallbackBand.
+TEST(FaceBlend, ATetThatSeesNothingTakesItsNeighboursSightDeeper) {
+  Level level = twoTets();
+  level.occlusion = hideFaceProbesInTet0();
+  level.occlusion.tets[0].cells = 0x00u;  // tet 0 sees none of its probes, on either side of its plane
+  const glm::vec3 f = facePoint(level, 0.3, 0.3), p0 = level.probes[0];
+  const auto at = [&](float t) { return faceProbeVisibility(level, 0, f + t * (p0 - f), glm::vec3(0.0f)); };
+  // Beyond the plain band (0.15) but inside the widened one: some of the neighbour's sight.
+  const float t = 0.2f, x = t / kFaceBlendFallbackBand, a = 1.0f - x * x * (3.0f - 2.0f * x);
+  const float expected = a / (1.0f + kFaceBlendFallbackTrust);  // trust 0.1 against 1
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(at(t)[i], expected, 2e-3f);
+  // Past the widened band: the tet's own data alone.
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(at(kFaceBlendFallbackBand + 0.01f)[i], 0.0f);
+}
+
+// A probe behind the surface is never seen from it: where neither side is blind, the neighbour may not raise
+// its visibility above the lower side's (a ceiling point on q3 dm4ish took a probe above the ceiling from its
+// neighbour's data). A probe in front still gets the trust-weighted mean.
+TEST(FaceBlend, TheNeighbourDoesNotRaiseAProbeBehindTheSurface) {
+  Level level = twoTets();
+  level.occlusion = hideFaceProbesInTet0();
+  level.occlusion.tets[0].cells = 0x33u;  // tet 0 sees its probes 0 and 1, hides 2 and 3; tet 1 sees all
+  const glm::vec3 x = facePoint(level, 0.3, 0.3), n(-1.0f, 0.0f, 0.0f);  // probe 2 (at x = 2) behind
+  const glm::vec3 a = faceProbeVisibility(level, 0, x, n), b = faceProbeVisibility(level, 1, x, n);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-5) << "probe " << i + 1;
+  EXPECT_NEAR(a[0], 1.0f, 1e-5);  // probe 1: both see it
+  EXPECT_NEAR(a[1], 0.0f, 1e-5);  // probe 2: behind the surface, hidden by tet 0
+  EXPECT_NEAR(a[2], 0.5f, 1e-4);  // probe 3: in front, the mean of two sides that both see (trust 1 each)
+}
+
 TEST(FaceBlend, BlendFadesContinuouslyAcrossTheBand) {
   Level level = twoTets();
   level.occlusion = hideFaceProbesInTet0();

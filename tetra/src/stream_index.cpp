@@ -1,6 +1,6 @@
 // Streaming index (stream_index.h): sectors from the cell grid's occupied cells, each holding the tets whose
-// bounding boxes touch the cell (grown by a margin), their probes and the cell's BSP renumbered from 0; and a
-// coarse probe set (one probe per coarse cube, nearest its centre) tetrahedralized with CGAL Delaunay. Layout
+// bounding boxes touch the cell (grown by a margin) and their face neighbours, their probes and the cell's
+// BSP renumbered from 0; and a coarse probe set (one probe per coarse cube, nearest its centre) tetrahedralized with CGAL Delaunay. Layout
 // in docs/level_format.md (section STRM).
 #include "tetraprobe/tetra/stream_index.h"
 
@@ -135,6 +135,12 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
       node.child[1] = local(node.child[1]);
       d.nodes.push_back(node);
     }
+    // The face blend (runtime/face_blend.h) consults a tet's face neighbours: they join the sector too (one
+    // ring), so a loaded sector answers as the full level does.
+    const size_t own = d.tets.size();
+    for (size_t i = 0; i < own; ++i)
+      for (int32_t nb : level.tets[d.tets[i]].n)
+        if (nb >= 0) d.tets.push_back(uint32_t(nb));
     std::sort(d.tets.begin(), d.tets.end());
     d.tets.erase(std::unique(d.tets.begin(), d.tets.end()), d.tets.end());
     for (uint32_t t : d.tets)

@@ -7,25 +7,35 @@
 //
 // For the point's tet T with located weights w (w_k = 0 on the face opposite probe k), its visibility v,
 // the neighbour N_k across that face, m_k = N_k's weight of its own vertex opposite the face (<= 0 in T),
-// v'_i = N_k's visibility of T's probe i (i != k; 1 when N_k stores nothing) and f, f' the fallback shares
-// (applyOcclusion) of T and N_k at the point by their own visibility alone:
-//   x_k = max(w_k, -m_k) / kFaceBlendBand    (distance to the face in band units, in the thinner of the two
+// v'_i = N_k's visibility of T's probe i (i != k; 1 when N_k stores nothing), front_i = probeFront of T's
+// probe i at the point (0 behind the surface) and b, b' the blindness of T and N_k at the point by their
+// own visibility alone, b = 1 - smoothstep(0, kFaceBlendBlindSum, s) with s the visible weight sum
+// applyOcclusion computes (1 where a side sees none of its probes; gentler than the fallback's share so
+// float rounding of s moves what it drives five times less, keeping GPU and CPU within 1e-5):
+//   B   = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) b    (the band: wider where T's own
+//                                             data sees nothing, so such a tet takes what its neighbours see
+//                                             throughout instead of the fallback's guess)
+//   x_k = max(w_k, -m_k) / B                 (distance to the face in band units, in the thinner of the two
 //                                             tets: N_k's data is extrapolated at most a band of its own
-//                                             height; w_k / kFaceBlendBand when N_k stores nothing)
+//                                             height; w_k / B when N_k stores nothing)
 //   a_k = 1 - smoothstep(0, 1, x_k)          (1 on the face, 0 from one band in)
-//   t = 1 - (1 - kFaceBlendFallbackTrust) f,  t' likewise from f'    (trust: a side that sees none of its
+//   t = 1 - (1 - kFaceBlendFallbackTrust) b,  t' likewise from b'    (trust: a side that sees none of its
 //                                             probes is trusted a tenth as much as one that sees)
 //   c = t / (t + t')
-//   v_i <- v_i + sum_{k != i} a_k ((c v_i + (1 - c) v'_i) - v_i),   clamped to [0, 1]
-// On the face opposite probe k, away from the other faces' bands, both tets get the same trust-weighted
-// mean of the two visibilities for each of the face's probes; their weights there agree, the fourth
+//   target_i = min(c v_i + (1 - c) v'_i, max(min(v_i, v'_i), front_i, max(b, b')))
+//                                             (a probe behind the surface is never seen from it: the
+//                                             neighbour may not raise it above the lower side's visibility,
+//                                             unless a side is blind, where any light it sees beats the
+//                                             fallback's guess; a ceiling's leak on q3 dm4ish came from it)
+//   v_i <- v_i + sum_{k != i} a_k (target_i - v_i),   clamped to [0, 1]
+// On the face opposite probe k, away from the other faces' bands, both tets get the same target for each of
+// the face's probes (every term is symmetric in the two sides); their weights there agree, the fourth
 // probe's is 0, so the occluded blend, the fallback's share and the fallback's answer (occludedIrradiance)
 // agree: the light is continuous across the face. Within a band of an edge the tets around the edge that
-// are not face neighbours are not consulted, so a smaller jump can remain along edges (tests/stability:
-// below 2e-6 of the lit irradiance away from edges, 0.46 at most within an edge's band, where it was 0.82
-// without the blend). Only visibility is fetched from the neighbour (its frame and occlusion record; no
-// SH). Cost: with a band of 0.15 about 1.5 faces per point qualify; a point's occluded shading takes about
-// twice as long on the CPU and 1.6x on lavapipe (docs/occlusion.md).
+// are not face neighbours are not consulted, so a smaller jump can remain along edges (tests/stability).
+// Only visibility is fetched from the neighbour (its frame and occlusion record; no SH). Cost: about 1.5
+// faces per point qualify; a point's occluded shading takes about twice as long on the CPU and 1.6x on
+// lavapipe (docs/occlusion.md).
 // Faces on the hull, faces whose two tets both store no occlusion (every probe visible on both sides), a
 // neighbour storing nothing where this tet sees every probe too (nothing would change) and points outside
 // the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe.glsl
@@ -43,19 +53,15 @@
 namespace tetraprobe {
 
 inline constexpr float kFaceBlendBand = 0.15f;          // band half-width, barycentric (of the thinner tet)
-inline constexpr float kFaceBlendFallbackTrust = 0.1f;  // c of a side that sees none of its probes
-
-// Whether any face is close enough for faceBlendVisibility to consult its neighbour (some w_k below the
-// band).
-inline bool nearFace(const glm::vec4& weights) {
-  return weights.x < kFaceBlendBand || weights.y < kFaceBlendBand || weights.z < kFaceBlendBand ||
-         weights.w < kFaceBlendBand;
-}
+inline constexpr float kFaceBlendFallbackTrust = 0.1f;  // t of a side that sees none of its probes
+inline constexpr float kFaceBlendBlindSum = 0.05f;      // visible weight sum from which a side is not blind
+inline constexpr float kFaceBlendFallbackBand = 0.3f;   // the band where the tet's own data sees nothing
+                                                        // (past the centroid's 0.25: the whole tet)
 
 // The blend above for a point at local-frame `local` (normal as occlusionVisibility takes it) inside tet
 // `tet` (a valid index; not for points outside the hull) with located weights `weights` (non-negative,
 // summing to 1) and the tet's own visibility `visibility` (occlusionVisibility). Returns `visibility`
-// unchanged where no face qualifies. Finite for finite input.
+// unchanged where no face qualifies (every w_k at least the band). Finite for finite input.
 glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
                               const glm::vec3& normal);

@@ -1,6 +1,7 @@
 // The streaming index of a level (the optional STRM section, docs/level_format.md; read by the runtime's
 // StreamingLevel, runtime/streaming.h): per sector (one occupied cell of the level's cell grid) the tets
-// whose bounding boxes touch the cell, their probes and the cell's BSP nodes, plus a coarse probe set
+// whose bounding boxes touch the cell and their face neighbours (the run time's face blend reads them),
+// their probes and the cell's BSP nodes, plus a coarse probe set
 // tetrahedralized here for the regions not loaded. Build side (CGAL Delaunay for the coarse set).
 #pragma once
 
