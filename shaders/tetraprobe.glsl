@@ -858,17 +858,27 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
   precise float band = TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * ownBlind;
-  // A probe behind the surface is not raised above the lower side's visibility (unless a side sees nothing).
-  vec4 front = tetraprobeProbeFront(t, x, n);
+  // The faces to consult first (cheap tests), then the costly part once per listed face: a SIMD lane group
+  // runs as many iterations as its busiest pixel has faces, not four.
+  int faces[4];
+  int count = 0;
   for (int k = 0; k < 4; ++k) {
     int nb = nbs[k];
     if (!(weights[k] < band) || nb < 0) continue;
-    bool otherData = tetraprobeOccKind(nb) != 0u;
-    if (!otherData) {  // the neighbour sees every probe: nothing to blend where this tet does too
+    if (tetraprobeOccKind(nb) == 0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
       bool allSeen = true;
       for (int i = 0; i < 4; ++i) allSeen = allSeen && (i == k || vis[i] == 1.0);
       if (!ownData || allSeen) continue;
     }
+    faces[count++] = k;
+  }
+  if (count == 0) return vis;
+  // A probe behind the surface is not raised above the lower side's visibility (unless a side sees nothing).
+  vec4 front = tetraprobeProbeFront(t, x, n);
+  for (int q = 0; q < count; ++q) {
+    int k = faces[q];
+    int nb = nbs[k];
+    bool otherData = tetraprobeOccKind(nb) != 0u;
     ivec4 nv = tetraprobeTets[nb].v;
     precise float d = max(weights[k], 0.0) / band;
     vec4 other = vec4(1.0);
