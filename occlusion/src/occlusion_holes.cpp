@@ -18,6 +18,7 @@
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh.h"
@@ -174,6 +175,14 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   FlushDenormalsScope ftz;
   for (const SurfacePoint& sp : points) {
     const Location loc = query.locate(sp.position);
+    if (loc.tet >= 0) {
+      float lookupFallback = 0.0f;
+      applyOcclusion(loc.weights,
+                     lookupVisibility(level, level.occlusion, loc.tet, loc.weights, loc.outerCell < 0,
+                                      glm::vec3(sp.position - level.origin), sp.normal),
+                     &lookupFallback);
+      out.lookupFallbackPoints += lookupFallback > 0.0f;
+    }
     if (!(fallbackShareAt(level, loc, sp.position, sp.normal) > 0.0f)) continue;
     ++out.holePoints;
     if (options.onlyUnseen && fallbackProbeSeen(tracer, level, loc, sp.position, sp.normal)) {

@@ -376,8 +376,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (stats.finalChecked > 0)
     std::printf(
         "  fallback %zu of %zu surface points (%.1f %%) see none of their tet's probes in the finished "
-        "level\n",
-        stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked));
+        "level by its data; %zu (%.1f %%) after the face blend with the neighbours' (the lookup's answer)\n",
+        stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked),
+        stats.finalLookupFallbacks, 100.0 * double(stats.finalLookupFallbacks) / double(stats.finalChecked));
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
@@ -479,7 +480,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     j["holes"] = {{"rounds", rounds},
                   {"probes_added", stats.holeProbes},
                   {"final_points_checked", stats.finalChecked},
-                  {"final_hole_points", stats.finalHoles}};
+                  {"final_hole_points", stats.finalHoles},
+                  {"final_lookup_fallback_points", stats.finalLookupFallbacks}};
     j["refine"] = {{"probes_added", stats.refineProbes},
                    {"points", stats.refineBefore.points},
                    {"mean_log2_error_before", stats.refineBefore.meanLogError},

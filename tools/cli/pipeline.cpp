@@ -406,6 +406,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     const OcclusionHoles left = findOcclusionHoles(tracer, level, ho);
     stats.finalChecked = left.pointsChecked;
     stats.finalHoles = left.holePoints;
+    stats.finalLookupFallbacks = left.lookupFallbackPoints;
     timer.mark("check");
   }
 

@@ -36,7 +36,10 @@ struct OcclusionHoles {
   size_t pointsChecked = 0;  // surface points drawn (on their open side)
   size_t holePoints = 0;     // of those, points that see none of their tet's probes (fallback share > 0)
   size_t seenPoints = 0;     // of those, with onlyUnseen: points left alone, their fallback probe seen
-  std::vector<glm::dvec3> probes;  // new probe positions, world metres, deterministic order
+  size_t lookupFallbackPoints = 0;  // of pointsChecked, points whose run-time answer falls back: the
+                                    // visibility after the face blend (lookupVisibility, face_blend.h) hides
+                                    // every probe; fewer than holePoints, which judge the tet's data alone
+  std::vector<glm::dvec3> probes;   // new probe positions, world metres, deterministic order
 };
 
 // New probes in front of surface points, shared by hole filling and error-driven refinement (eval/refine.h):
