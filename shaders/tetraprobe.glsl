@@ -857,7 +857,8 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   vec4 o = vis;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
-  precise float band = TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * ownBlind;
+  precise float band =
+      TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * ownBlind;
   // The faces to consult first (cheap tests), then the costly part once per listed face: a SIMD lane group
   // runs as many iterations as its busiest pixel has faces, not four.
   int faces[4];
@@ -865,7 +866,8 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   for (int k = 0; k < 4; ++k) {
     int nb = nbs[k];
     if (!(weights[k] < band) || nb < 0) continue;
-    if (tetraprobeOccKind(nb) == 0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
+    if (tetraprobeOccKind(nb) ==
+        0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
       bool allSeen = true;
       for (int i = 0; i < 4; ++i) allSeen = allSeen && (i == k || vis[i] == 1.0);
       if (!ownData || allSeen) continue;
@@ -921,7 +923,6 @@ vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
   if (loc.outerCell < 0) vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
   return vis;
 }
-
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
