@@ -392,8 +392,8 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
             const Location loc = query->locate(p);
             if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
             const glm::vec3 local(p - lv->origin);
-            const glm::vec4 vis =
-                lookupVisibility(*lv, *occlusion, loc.tet, loc.weights, loc.outerCell < 0, local, n);
+            const glm::vec4 vis = lookupVisibility(
+                *lv, *occlusion, loc, occlusionVisibility(*lv, *occlusion, loc.tet, local, n), local, n);
             return occludedIrradianceAt(*lv, loc.tet, loc.weights, vis, local, n);
           }};
 }

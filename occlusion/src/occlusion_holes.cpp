@@ -107,13 +107,18 @@ bool ProbesInFront::propose(const glm::dvec3& point, const glm::vec3& normal) {
 
 namespace {
 
-// occlusionFallbackShare at a point already located.
+// The fallback's share at a point already located, by the tet's own data (occlusionFallbackShare) and, with
+// `lookup`, by the visibility the run-time lookup uses after the face blend.
 float fallbackShareAt(const Level& level, const Location& loc, const glm::dvec3& point,
-                      const glm::vec3& normal) {
+                      const glm::vec3& normal, float* lookup = nullptr) {
+  if (lookup) *lookup = 0.0f;
   if (level.occlusion.empty() || loc.tet < 0) return 0.0f;
   float fallback = 0.0f;
   const glm::vec3 local(point - level.origin);
-  applyOcclusion(loc.weights, occlusionVisibility(level, level.occlusion, loc.tet, local, normal), &fallback);
+  const glm::vec4 own = occlusionVisibility(level, level.occlusion, loc.tet, local, normal);
+  applyOcclusion(loc.weights, own, &fallback);
+  if (lookup)
+    applyOcclusion(loc.weights, lookupVisibility(level, level.occlusion, loc, own, local, normal), lookup);
   return fallback;
 }
 
@@ -175,15 +180,10 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   FlushDenormalsScope ftz;
   for (const SurfacePoint& sp : points) {
     const Location loc = query.locate(sp.position);
-    if (loc.tet >= 0) {
-      float lookupFallback = 0.0f;
-      applyOcclusion(loc.weights,
-                     lookupVisibility(level, level.occlusion, loc.tet, loc.weights, loc.outerCell < 0,
-                                      glm::vec3(sp.position - level.origin), sp.normal),
-                     &lookupFallback);
-      out.lookupFallbackPoints += lookupFallback > 0.0f;
-    }
-    if (!(fallbackShareAt(level, loc, sp.position, sp.normal) > 0.0f)) continue;
+    float lookupFallback = 0.0f;
+    const float fallback = fallbackShareAt(level, loc, sp.position, sp.normal, &lookupFallback);
+    out.lookupFallbackPoints += lookupFallback > 0.0f;
+    if (!(fallback > 0.0f)) continue;
     ++out.holePoints;
     if (options.onlyUnseen && fallbackProbeSeen(tracer, level, loc, sp.position, sp.normal)) {
       ++out.seenPoints;

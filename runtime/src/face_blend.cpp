@@ -97,13 +97,11 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
   return glm::clamp(out, 0.0f, 1.0f);
 }
 
-glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
-                           const glm::vec4& weights, bool insideHull, const glm::vec3& local,
-                           const glm::vec3& normal) {
-  if (occlusion.empty() || tet < 0 || size_t(tet) >= level.tets.size()) return glm::vec4(1.0f);
-  const glm::vec4 vis = occlusionVisibility(level, occlusion, tet, local, normal);
-  if (!insideHull) return vis;
-  return faceBlendVisibility(level, occlusion, tet, weights, vis, local, normal);
+glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, const Location& loc,
+                           const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal) {
+  if (occlusion.empty() || loc.tet < 0 || size_t(loc.tet) >= level.tets.size() || loc.outerCell >= 0)
+    return visibility;
+  return faceBlendVisibility(level, occlusion, loc.tet, loc.weights, visibility, local, normal);
 }
 
 }  // namespace tetraprobe

@@ -667,8 +667,7 @@ glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const 
     }
     // Near a face, blended with the neighbour's visibility of the face's probes, so that the two tets' data
     // leave no seam (face_blend.h); not outside the hull, where the outer cell's weights are not the tet's.
-    if (loc.outerCell < 0)
-      vis = faceBlendVisibility(level_, level_.occlusion, loc.tet, loc.weights, vis, local, normal);
+    vis = lookupVisibility(level_, level_.occlusion, loc, vis, local, normal);
     float fallback = 0.0f;
     weights = applyOcclusion(weights, vis, &fallback);
     if (fallback > 0.0f) return occludedIrradianceAt(level_, loc.tet, loc.weights, vis, local, normal);

@@ -65,9 +65,7 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   // What the answer uses: the tet's data blended near faces with its neighbours' (face_blend.h).
   const glm::vec4 own = query.usesOcclusion() ? occlusionVisibility(level, level.occlusion, loc.tet, local, n)
                                               : glm::vec4(1.0f);
-  const glm::vec4 vis = query.usesOcclusion() ? lookupVisibility(level, level.occlusion, loc.tet, loc.weights,
-                                                                 loc.outerCell < 0, local, n)
-                                              : glm::vec4(1.0f);
+  const glm::vec4 vis = lookupVisibility(level, level.occlusion, loc, own, local, n);
   if (vis != own)
     std::printf(
         "  face blend: near a face the visibility below is blended with the neighbour's (the tet's data "

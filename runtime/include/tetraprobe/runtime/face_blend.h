@@ -49,6 +49,7 @@
 
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/occlusion_data.h"
+#include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
 
@@ -66,12 +67,11 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
                               const glm::vec3& normal);
 
-// The visibility of tet `tet`'s probes the run-time lookup uses (ProbeQuery::shade, tetraprobeLookupVisibility):
-// occlusionVisibility of the tet's data, blended near faces by faceBlendVisibility when the point is inside
-// the hull (`insideHull`: Location::outerCell < 0). `weights` as located (non-negative, summing to 1).
-// Every probe visible (vec4(1)) when the level stores no occlusion.
-glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
-                           const glm::vec4& weights, bool insideHull, const glm::vec3& local,
-                           const glm::vec3& normal);
+// The visibility of the located tet's probes the run-time lookup uses (ProbeQuery::shade,
+// tetraprobeLookupVisibility), from the tet's own `visibility` (occlusionVisibility at `local`, `normal`):
+// blended near faces by faceBlendVisibility when the point is inside the hull (loc.outerCell < 0), else
+// unchanged (outside the hull, no tet, or a level without occlusion).
+glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, const Location& loc,
+                           const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal);
 
 }  // namespace tetraprobe

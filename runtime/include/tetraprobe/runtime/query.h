@@ -85,7 +85,7 @@ class ProbeQuery {
   // given it is read as the walk's starting hint and updated with the tet found (per-object caching); the
   // answer is the same, bit for bit, as without it.
   // The level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point cannot see:
-  // w = applyOcclusion(weights, lookupVisibility(level, occlusion, tet, weights, inside, local, normal)): the
+  // w = applyOcclusion(weights, lookupVisibility(level, occlusion, location, own, local, normal)) with own the
   // tet's occlusionVisibility, the normal biasing the point off its surface (a zero normal: no bias), blended
   // inside the hull with the face neighbours' (face_blend.h); a point that sees none falls back
   // (occludedIrradiance). Outside the hull `tet` is the outer cell's hull tet, whose occlusion applies to the
