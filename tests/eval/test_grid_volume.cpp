@@ -174,10 +174,7 @@ TEST(GridRender, GpuPassMatchesCpuLookup) {
                                      float(0.7 + 0.05 * c * std::cos(p.y * 2.0)));
   }
   const GridVolume grid(layout, sh, std::vector<uint8_t>(sh.size(), 0));
-  const Scene s = test::floorUnderSky(glm::vec3(0.5f), glm::vec3(1.0f));
-  RenderMesh mesh;
-  mesh.positions = s.positions;
-  mesh.triangles = s.triangles;
+  const RenderMesh mesh = test::floorMesh();
   RenderView view = test::floorView(48, 32);
   view.mode = RenderMode::kIrradiance;
   RenderGrid g;

@@ -24,6 +24,15 @@ inline Scene floorUnderSky(glm::vec3 albedo, glm::vec3 sky) {
   return s;
 }
 
+// floorUnderSky's geometry as the renderer takes it (no albedo: irradiance views).
+inline RenderMesh floorMesh() {
+  const Scene s = floorUnderSky(glm::vec3(0.5f), glm::vec3(1.0f));
+  RenderMesh mesh;
+  mesh.positions = s.positions;
+  mesh.triangles = s.triangles;
+  return mesh;
+}
+
 // Looking down at the floor from 3 m: every pixel of it sees the floor within about 15 m.
 inline RenderView floorView(int width = 64, int height = 48) {
   RenderView v;

@@ -70,10 +70,7 @@ TEST(NearestProbe, AgreesWithBruteForceInsideAndFarOutside) {
 TEST(NearestRender, GpuPassLightsEachPixelWithTheNearestProbe) {
   const Level level = scatteredLevel(300, 3);
   const NearestProbe buckets(level);
-  const Scene s = test::floorUnderSky(glm::vec3(0.5f), glm::vec3(1.0f));
-  RenderMesh mesh;
-  mesh.positions = s.positions;
-  mesh.triangles = s.triangles;
+  const RenderMesh mesh = test::floorMesh();
   RenderView view = test::floorView(48, 32);
   view.mode = RenderMode::kIrradiance;
   RenderResult r;

@@ -17,6 +17,7 @@
 #include "eval_plot.h"
 #include "image_compare.h"
 #include "pipeline.h"
+#include "render_view.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/eval/evaluate.h"
@@ -99,15 +100,6 @@ struct EvalSetup {
   std::shared_ptr<const LevelOcclusion> built;  // --occlusion for a level without stored occlusion
   int threads = 0;
 };
-
-RenderMesh toRenderMesh(const Scene& scene) {
-  RenderMesh mesh;
-  mesh.positions = scene.positions;
-  mesh.triangles = scene.triangles;
-  mesh.triangleAlbedo.reserve(scene.triangles.size());
-  for (uint32_t m : scene.triangleMaterial) mesh.triangleAlbedo.push_back(scene.materials[m].albedo);
-  return mesh;
-}
 
 std::string mb(uint64_t bytes) {
   char buf[32];
