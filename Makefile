@@ -77,6 +77,7 @@ update-references: build
 
 bench: build
 	@$(BUILD_DIR)/bin/tetraprobe_bench
+	@$(BUILD_DIR)/bin/tetraprobe_bench_load
 
 clean:
 	rm -rf $(BUILD_DIR) $(FUZZ_DIR) $(SANITIZE_DIR) out

@@ -17,6 +17,7 @@
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/tet_adjacency.h"
 
 #include "crc32.h"
 
@@ -34,7 +35,8 @@ constexpr uint32_t kSectionRequired = 1u;      // flags: a reader that does not 
 constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
 constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficients x RGB f32
 constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
-constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // v[4] i32, n[4] i32
+constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // TETS (read only): v[4] i32, n[4] i32
+constexpr uint64_t kTetCompactBytes = 4 * 4;   // TETC: v[4] i32 (neighbours derived on load)
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
@@ -43,10 +45,11 @@ constexpr uint64_t kMaxGeneratorBytes = 1u << 20;
 // Earth's diameter) a float holds a position to no better than 2 m, and the cell-grid keys built from them
 // on load could leave the int32 range for small cells. The bake centres the origin on the probes.
 constexpr float kMaxLocalCoordinate = 16777216.0f;
-static_assert(kTetBytes == sizeof(Tet), "the file's tet record is the GPU's 32-byte std430 Tet");
+static_assert(kTetBytes == sizeof(Tet), "the old tet record is the GPU's 32-byte std430 Tet");
 static_assert(kShBytes == sizeof(ShRgb), "the old SH record is the 108-byte ShRgb");
 static_assert(kShHalfBytes == sizeof(ShHalf), "the file's SH record is the 56-byte ShHalf");
-static_assert(kOuterCellBytes == sizeof(OuterCell), "the file's outer cell record is the 80-byte OuterCell");
+static_assert(kOuterCellBytes == sizeof(OuterCell),
+              "the old outer cell record (OUTC, read only) is the 80-byte OuterCell");
 
 // Section tags: four ASCII characters, read as a little-endian u32.
 constexpr uint32_t tag(const char (&s)[5]) {
@@ -54,9 +57,9 @@ constexpr uint32_t tag(const char (&s)[5]) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
-                   kTagTets = tag("TETS"), kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"),
-                   kTagCellGrid = tag("CGR2"), kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"),
-                   kTagStream = tag("STRM");
+                   kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagGenerator = tag("GENR"),
+                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagOcclusion = tag("OCCL"),
+                   kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
@@ -380,27 +383,13 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
               " has an SH coefficient beyond the file's half-precision range (|c| > 2.1e9 W/(m^2 sr))");
     for (uint16_t v : h.h) sections.back().bytes.i16(int16_t(v));
   }
-  sections.push_back({kTagTets, kSectionRequired, {}});
-  for (const Tet& t : level.tets) {
-    Writer& w = sections.back().bytes;
-    for (int32_t v : t.v) w.i32(v);
-    for (int32_t n : t.n) w.i32(n);
-  }
+  // Tets: vertices only. Neighbours and outer cells are functions of them (linkTetNeighbours on load,
+  // buildOuterCells in ProbeQuery), so they are not stored: 16 + 80 x hull faces / tets bytes a tet less.
+  sections.push_back({kTagTetsCompact, kSectionRequired, {}});
+  for (const Tet& t : level.tets)
+    for (int32_t v : t.v) sections.back().bytes.i32(v);
   sections.push_back({kTagGenerator, kSectionRequired, {}});
   sections.back().bytes.bytes(level.generator.data(), level.generator.size());
-  if (!level.outerCells.empty()) {
-    sections.push_back({kTagOuterCells, 0, {}});
-    for (const OuterCell& c : level.outerCells) {
-      Writer& w = sections.back().bytes;
-      for (int32_t v : c.v) w.i32(v);
-      w.i32(c.tet);
-      for (int32_t n : c.n) w.i32(n);
-      w.i32(c.face);
-      for (const auto& n : c.normal)
-        for (int a = 0; a < 3; ++a) w.f32(n[a]);
-      for (int pad = 0; pad < 3; ++pad) w.u32(0);
-    }
-  }
 
   if (!level.cellGrid.slots.empty()) {
     const CellGrid& g = level.cellGrid;
@@ -526,8 +515,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                            " probes, " + std::to_string(tetCount) + " tets, " +
                                            std::to_string(generatorBytes) + " generator bytes");
   const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
-  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) + tetCount * kTetBytes +
-                           generatorBytes + kTrailerBytes;
+  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) +
+                           tetCount * kTetCompactBytes + generatorBytes + kTrailerBytes;
   if (size < minimum)
     return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
                                              " bytes, the header needs at least " + std::to_string(minimum));
@@ -540,7 +529,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, shHalf, tets, generator, outer, cellGrid, occlusion, kinds, stream;
+  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, occlusion, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -550,17 +539,18 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     if ((flags & ~kSectionRequired) != 0 || offset != expected || bytes > kMaxSectionBytes)
       return fail(LevelStatus::kCorrupt, name + where + "bad flags, offset or size");
     expected += bytes;
-    Section* known = t == kTagProbes       ? &probes
-                     : t == kTagSh         ? &sh
-                     : t == kTagShHalf     ? &shHalf
-                     : t == kTagTets       ? &tets
-                     : t == kTagGenerator  ? &generator
-                     : t == kTagOuterCells ? &outer
-                     : t == kTagCellGrid   ? &cellGrid
-                     : t == kTagOcclusion  ? &occlusion
-                     : t == kTagProbeKinds ? &kinds
-                     : t == kTagStream     ? &stream
-                                           : nullptr;
+    Section* known = t == kTagProbes        ? &probes
+                     : t == kTagSh          ? &sh
+                     : t == kTagShHalf      ? &shHalf
+                     : t == kTagTets        ? &tets
+                     : t == kTagTetsCompact ? &tetsCompact
+                     : t == kTagGenerator   ? &generator
+                     : t == kTagOuterCells  ? &outer
+                     : t == kTagCellGrid    ? &cellGrid
+                     : t == kTagOcclusion   ? &occlusion
+                     : t == kTagProbeKinds  ? &kinds
+                     : t == kTagStream      ? &stream
+                                            : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
         return fail(LevelStatus::kUnsupportedVersion,
@@ -596,7 +586,13 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                      : sized(sh, probeCount * kShBytes, "SH");
       !e)
     return e;
-  if (LevelResult e = sized(tets, tetCount * kTetBytes, "tet"); !e) return e;
+  // Tets: vertices only (TETC, what saveLevel writes) or with neighbours (TETS, levels written before it).
+  if (tets.present && tetsCompact.present)
+    return fail(LevelStatus::kCorrupt, name + "both TETS and TETC tet sections");
+  if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * kTetCompactBytes, "tet")
+                                          : sized(tets, tetCount * kTetBytes, "tet");
+      !e)
+    return e;
   if (LevelResult e = sized(generator, generatorBytes, "generator"); !e) return e;
   if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
     return fail(LevelStatus::kCorrupt,
@@ -663,11 +659,33 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
         c.z = body.f32();
       }
   }
-  body = Reader(data + tets.offset);
   level.tets.resize(size_t(tetCount));
-  for (Tet& t : level.tets) {
-    for (int32_t& v : t.v) v = body.i32();
-    for (int32_t& n : t.n) n = body.i32();
+  if (tetsCompact.present) {
+    body = Reader(data + tetsCompact.offset);
+    for (size_t t = 0; t < level.tets.size(); ++t) {
+      Tet& tet = level.tets[t];
+      for (int i = 0; i < 4; ++i) {
+        tet.v[i] = body.i32();
+        tet.n[i] = -1;
+        // linkTetNeighbours' precondition (validateLevel repeats these checks on the result).
+        if (tet.v[i] < 0 || uint64_t(tet.v[i]) >= probeCount)
+          return fail(LevelStatus::kCorrupt, name + "tet " + std::to_string(t) + ": vertex " +
+                                                 std::to_string(tet.v[i]) + " out of range (" +
+                                                 std::to_string(probeCount) + " probes)");
+        for (int j = 0; j < i; ++j)
+          if (tet.v[i] == tet.v[j])
+            return fail(LevelStatus::kCorrupt, name + "tet " + std::to_string(t) + ": vertex " +
+                                                   std::to_string(tet.v[i]) + " repeated");
+      }
+    }
+    if (std::string e = linkTetNeighbours(level.tets, size_t(probeCount)); !e.empty())
+      return fail(LevelStatus::kCorrupt, name + e);
+  } else {
+    body = Reader(data + tets.offset);
+    for (Tet& t : level.tets) {
+      for (int32_t& v : t.v) v = body.i32();
+      for (int32_t& n : t.n) n = body.i32();
+    }
   }
   level.generator.assign(reinterpret_cast<const char*>(data + generator.offset), size_t(generatorBytes));
   if (outer.present) {

@@ -10,6 +10,7 @@
 #include "tetraprobe/runtime/streaming.h"
 
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/tet_adjacency.h"
 
 #include <algorithm>
 #include <bit>
@@ -103,6 +104,7 @@ size_t indexOf(const std::vector<uint32_t>& sorted, uint32_t v) {
 struct StreamingLevel::File {
   std::ifstream in;
   uint64_t probes = 0, sh = 0, tets = 0;  // section offsets
+  uint64_t tetRecord = 16;                // tet bytes: 16 (TETC, vertices) or 32 (TETS, with neighbours)
   uint64_t shRecord = 108;                // SH bytes a probe: 108 (SHRG, float) or 56 (SHRH, ShHalf)
   uint64_t occl = 0;                      // 0: no occlusion section
   uint64_t strm = 0;                      // the streaming index section
@@ -196,7 +198,11 @@ LevelResult StreamingLevel::open(const std::string& path) {
       f->sh = offset, shSize = bytes, haveSh = true;
       f->shRecord = t == tag("SHRH") ? sizeof(ShHalf) : sizeof(ShRgb);
     }
-    if (t == tag("TETS")) f->tets = offset, tetsSize = bytes, haveTets = true;
+    if (t == tag("TETS") || t == tag("TETC")) {
+      if (haveTets) return fail(LevelStatus::kCorrupt, name + "more than one tet section");
+      f->tets = offset, tetsSize = bytes, haveTets = true;
+      f->tetRecord = t == tag("TETC") ? 16 : 32;
+    }
     if (t == tag("OCCL")) f->occl = offset, occlSize = bytes;
     if (t == tag("STRM")) strm = offset, strmSize = bytes;
   }
@@ -204,7 +210,7 @@ LevelResult StreamingLevel::open(const std::string& path) {
     return fail(size < expected + 4 ? LevelStatus::kTruncated : LevelStatus::kCorrupt,
                 name + "file size does not match the section table");
   if (!haveProbes || !haveSh || !haveTets || probesSize != 12 * f->probeCount ||
-      shSize != f->shRecord * f->probeCount || tetsSize != 32 * f->tetCount)
+      shSize != f->shRecord * f->probeCount || tetsSize != f->tetRecord * f->tetCount)
     return fail(LevelStatus::kCorrupt, name + "probe, SH or tet section missing or mis-sized");
   // The payload checksum, in pieces: the records load() reads later are the ones checked here.
   {
@@ -366,13 +372,17 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   // The records, read where the level keeps them.
   uint8_t buf[108];
   for (uint32_t t : s->tetIds) {
-    if (!f.read(f.tets + 32ull * t, buf, 32)) return fail(LevelStatus::kCannotOpen, where + "read failed");
-    Tet rec;
-    for (int k = 0; k < 4; ++k) rec.v[k] = i32At(buf + 4 * k);
-    for (int k = 0; k < 4; ++k) rec.n[k] = i32At(buf + 16 + 4 * k);
-    for (int32_t v : rec.v)
+    if (!f.read(f.tets + f.tetRecord * t, buf, 16))
+      return fail(LevelStatus::kCannotOpen, where + "read failed");
+    Tet rec;  // neighbours: linked among the loaded tets when the fine level is assembled
+    for (int k = 0; k < 4; ++k) rec.v[k] = i32At(buf + 4 * k), rec.n[k] = -1;
+    for (int k = 0; k < 4; ++k) {
+      const int32_t v = rec.v[k];
       if (v < 0 || !std::binary_search(s->probeIds.begin(), s->probeIds.end(), uint32_t(v)))
         return bad("tet " + std::to_string(t) + " names a probe outside the sector");
+      for (int j = 0; j < k; ++j)
+        if (rec.v[j] == v) return bad("tet " + std::to_string(t) + " repeats probe " + std::to_string(v));
+    }
     s->tets.push_back(rec);
   }
   for (uint32_t p : s->probeIds) {
@@ -470,11 +480,6 @@ void StreamingLevel::rebuild() {
       const size_t i = indexOf(tets, s->tetIds[k]);
       Tet t = s->tets[k];
       for (int32_t& v : t.v) v = int32_t(indexOf(probes, uint32_t(v)));
-      for (int32_t& n : t.n) {
-        if (n < 0) continue;
-        const size_t j = indexOf(tets, uint32_t(n));
-        n = j < tets.size() && tets[j] == uint32_t(n) ? int32_t(j) : -1;  // unloaded: cut
-      }
       fine_.tets[i] = t;
       if (occluded) {
         occ[i] = s->occ[k];
@@ -488,6 +493,10 @@ void StreamingLevel::rebuild() {
       }
     }
   }
+  // Neighbours among the loaded tets (a face whose other tet is not loaded is cut: -1). A face of three
+  // loaded tets cannot come from a valid file; its tets stay cut rather than walk a wrong link.
+  if (!linkTetNeighbours(fine_.tets, fine_.probes.size()).empty())
+    for (Tet& t : fine_.tets) t.n[0] = t.n[1] = t.n[2] = t.n[3] = -1;
   // Occlusion, repacked in local tet order (offsets renumbered, the records' other bits kept).
   if (occluded) {
     LevelOcclusion& o = fine_.occlusion;

@@ -44,7 +44,8 @@ TEST(HostileLevels, FileOverTheByteLimitIsTooLargeNotBadAlloc) {
   ASSERT_TRUE(saveLevel(dir.file("l.tpb"), level));
   const auto size = fs::file_size(dir.file("l.tpb"));
   Level out;
-  EXPECT_TRUE(loadLevel(dir.file("l.tpb"), out, size));  // exactly at the limit: fine
+  const LevelResult atLimit = loadLevel(dir.file("l.tpb"), out, size);  // exactly at the limit: fine
+  EXPECT_TRUE(atLimit) << int(atLimit.status) << " " << atLimit.message;
   const LevelResult r = loadLevel(dir.file("l.tpb"), out, size - 1);
   EXPECT_EQ(r.status, LevelStatus::kTooLarge) << r.message;
   EXPECT_NE(r.message.find("more than the limit"), std::string::npos) << r.message;

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstring>
@@ -155,9 +156,13 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(std::memcmp(back.sh.data(), level.sh.data(), level.sh.size() * sizeof(ShRgb)), 0);
   EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
   EXPECT_EQ(back.generator, level.generator);
-  ASSERT_EQ(back.outerCells.size(), level.outerCells.size());
+  // Neighbours (compared with the tets above) and outer cells are not stored but derived: the query builds
+  // the same outer cells, bit for bit.
+  EXPECT_TRUE(back.outerCells.empty());
   ASSERT_FALSE(level.outerCells.empty());
-  EXPECT_EQ(std::memcmp(back.outerCells.data(), level.outerCells.data(),
+  const ProbeQuery query(back);
+  ASSERT_EQ(query.outerCells().size(), level.outerCells.size());
+  EXPECT_EQ(std::memcmp(query.outerCells().data(), level.outerCells.data(),
                         level.outerCells.size() * sizeof(OuterCell)),
             0);
   const CellGrid &g = level.cellGrid, &gb = back.cellGrid;
@@ -177,12 +182,12 @@ TEST(LevelFile, RoundTripIsBitExact) {
   ASSERT_TRUE(saveLevel(dir.file("c.tpb"), back));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
-  // The documented size: 80-byte header, six 24-byte table entries and the table's CRC, 68 bytes per
-  // probe (12 position + 56 half-precision SH), 32 per tet, the generator, 80 per outer cell, the cell grid (64-byte header, 16 per slot, 24 per
-  // node), a 4-byte CRC.
-  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(),
-            80 + 6 * 24 + 4 + 68 * level.probes.size() + 32 * level.tets.size() + level.generator.size() +
-                80 * level.outerCells.size() + 64 + 16 * g.slots.size() + 24 * g.nodes.size() + 4);
+  // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 68 bytes per
+  // probe (12 position + 56 half-precision SH), 16 per tet (its probes), the generator, the cell grid
+  // (64-byte header, 16 per slot, 24 per node), a 4-byte CRC.
+  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() +
+                                                   16 * level.tets.size() + level.generator.size() + 64 +
+                                                   16 * g.slots.size() + 24 * g.nodes.size() + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -227,7 +232,7 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   const Level level = smallLevel();
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
-  const size_t tets = sectionOffset(full, "TETS"), outer = sectionOffset(full, "OUTC");
+  const size_t tets = sectionOffset(full, "TETC");
   const size_t grid = sectionOffset(full, "CGR2"), slots = grid + 64,
                nodes = slots + 16 * level.cellGrid.slots.size();
   ASSERT_FALSE(level.cellGrid.nodes.empty());
@@ -237,15 +242,10 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
     size_t offset;
     uint32_t value;
     const char* needle;
-  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},        // tet 0 vertex 0
-               {tets + 4, uint32_t(-7), "out of range"},                         // tet 0 vertex 1
-               {tets + 16, uint32_t(level.tets.size()), "out of range"},         // tet 0 neighbour 0
-               {tets + 4, uint32_t(level.tets[0].v[0]), "repeated"},             // tet 0 vertex 1 = vertex 0
-               {outer + 12, uint32_t(level.tets.size()), "out of range"},        // outer cell 0's tet
-               {outer + 16, uint32_t(level.outerCells.size()), "out of range"},  // outer cell 0's link 0
-               {outer + 0, uint32_t(level.probes.size() + 3), "not a vertex"},   // outer cell 0's probe 0
-               {outer + 32, 0x7FC00000u, "not a unit vector"},                   // outer cell 0's normal: NaN
-               {outer + 76, 1u, "padding"},
+  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},   // tet 0 vertex 0
+               {tets + 4, uint32_t(-7), "out of range"},                    // tet 0 vertex 1
+               {tets + 16, uint32_t(level.probes.size()), "out of range"},  // tet 1 vertex 0
+               {tets + 4, uint32_t(level.tets[0].v[0]), "repeated"},        // tet 0 vertex 1 = vertex 0
                {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
                {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
                {nodes + 16, 0u, "child out of range"},  // node 0's under child: itself, not a later node
@@ -263,6 +263,33 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
     EXPECT_NE(r.message.find(c.needle), std::string::npos) << r.message;
     EXPECT_TRUE(emptyLevel(out));
   }
+}
+
+// Neighbours are derived from the stored probes of each tet (linkTetNeighbours): a file whose tets do not
+// form a tetrahedralization, here one tet copied over another (each of its interior faces then has three
+// tets), is refused with a message naming the face, not walked.
+TEST(LevelFile, RefusesTetsThatShareAFaceThreeWays) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  const size_t tets = sectionOffset(full, "TETC");
+  size_t interior = 0;
+  while (interior < level.tets.size() &&
+         *std::min_element(level.tets[interior].n, level.tets[interior].n + 4) < 0)
+    ++interior;
+  ASSERT_LT(interior, level.tets.size());
+  const size_t victim = interior == 0 ? 1 : 0;
+  std::vector<char> b = full;
+  for (int i = 0; i < 4; ++i)
+    putU32(b, tets + 16 * victim + 4 * size_t(i), uint32_t(level.tets[interior].v[i]));
+  fixPayloadCrc(b);
+  writeBytes(dir.file("forged.tpb"), b, b.size());
+  Level out;
+  const LevelResult r = loadLevel(dir.file("forged.tpb"), out);
+  EXPECT_EQ(r.status, LevelStatus::kCorrupt) << r.message;
+  EXPECT_NE(r.message.find("shared by 3 tets"), std::string::npos) << r.message;
+  EXPECT_TRUE(emptyLevel(out));
 }
 
 // Fuzzing past the checksums: whatever the validator lets through must be safe to query (no crash, no NaN,
@@ -395,7 +422,7 @@ TEST(LevelFile, SkipsUnknownOptionalSection) {
   const LevelResult r = loadLevel(dir.file("extra.tpb"), back);
   ASSERT_TRUE(r) << r.message;
   EXPECT_EQ(back.tets.size(), level.tets.size());
-  EXPECT_EQ(back.outerCells.size(), level.outerCells.size());
+  EXPECT_EQ(back.cellGrid.nodes.size(), level.cellGrid.nodes.size());
   // Its bytes are still covered by the checksum.
   std::vector<char> bad = b;
   bad[b.size() - 6] ^= 1;
@@ -403,24 +430,23 @@ TEST(LevelFile, SkipsUnknownOptionalSection) {
   EXPECT_EQ(loadLevel(dir.file("bad.tpb"), back).status, LevelStatus::kCorrupt);
 }
 
-// The file with its SHRH section replaced by SHRG holding `sh` as 108-byte float records (the SH section of
-// levels written before SH were stored in half precision), later sections moved, checksums consistent.
-std::vector<char> withFloatShSection(const std::vector<char>& full, const std::vector<ShRgb>& sh) {
+// The file with section `from` replaced by section `to` holding `data` (same place in the table), every
+// checksum made consistent again: how files written before a section changed look.
+std::vector<char> withSectionReplaced(const std::vector<char>& full, const char* from, const char* to,
+                                      const std::string& data) {
   const uint32_t n = getU32(full, 72);
   const size_t tableEnd = 80 + 24 * size_t(n) + 4;
-  std::string floats(sh.size() * sizeof(ShRgb), '\0');
-  std::memcpy(floats.data(), sh.data(), floats.size());  // little-endian f32, as the format stores them
   std::vector<char> b(full.begin(), full.begin() + long(tableEnd));
   int64_t shift = 0;
   for (uint32_t i = 0; i < n; ++i) {
     const size_t e = 80 + 24 * size_t(i);
     const uint64_t offset = getU64(full, e + 8), size = getU64(full, e + 16);
     putU64(b, e + 8, uint64_t(int64_t(offset) + shift));
-    if (getU32(full, e) == tagOf("SHRH")) {
-      putU32(b, e, tagOf("SHRG"));
-      putU64(b, e + 16, floats.size());
-      b.insert(b.end(), floats.begin(), floats.end());
-      shift += int64_t(floats.size()) - int64_t(size);
+    if (getU32(full, e) == tagOf(from)) {
+      putU32(b, e, tagOf(to));
+      putU64(b, e + 16, data.size());
+      b.insert(b.end(), data.begin(), data.end());
+      shift += int64_t(data.size()) - int64_t(size);
     } else {
       b.insert(b.end(), full.begin() + long(offset), full.begin() + long(offset + size));
     }
@@ -429,6 +455,87 @@ std::vector<char> withFloatShSection(const std::vector<char>& full, const std::v
   b.resize(b.size() + 4);
   fixPayloadCrc(b);
   return b;
+}
+
+// The file as written before SHRH: float SH (SHRG, 108-byte records).
+std::vector<char> withFloatShSection(const std::vector<char>& full, const std::vector<ShRgb>& sh) {
+  std::string floats(sh.size() * sizeof(ShRgb), '\0');
+  std::memcpy(floats.data(), sh.data(), floats.size());  // little-endian f32, as the format stores them
+  return withSectionReplaced(full, "SHRH", "SHRG", floats);
+}
+
+// The file as written before TETC: 32-byte tets with their neighbours (TETS) and the outer cells (OUTC,
+// 80-byte records, appended as the last section).
+std::vector<char> withOldTetsAndOuterCells(const std::vector<char>& full, const Level& level) {
+  std::string tets(level.tets.size() * sizeof(Tet), '\0');
+  std::memcpy(tets.data(), level.tets.data(), tets.size());  // v[4], n[4] little-endian i32, the old record
+  std::string cells;  // v[3], tet, n[3], face (i32), normals (3 x 3 f32), 12 bytes of zero padding
+  const auto put = [&cells](const void* p, size_t n) { cells.append(static_cast<const char*>(p), n); };
+  for (const OuterCell& c : level.outerCells) {
+    put(c.v, 12);
+    put(&c.tet, 4);
+    put(c.n, 12);
+    put(&c.face, 4);
+    for (const auto& nrm : c.normal) put(nrm, 12);
+    cells.append(12, '\0');
+  }
+  return withExtraSection(withSectionReplaced(full, "TETC", "TETS", tets), "OUTC", 0, cells);
+}
+
+// Levels written before TETC (tets with neighbours, and outer cells) still load, as written; their
+// neighbours and outer cells are checked as before (walks trust them), and a file with both tet sections is
+// refused.
+TEST(LevelFile, ReadsOldTetsWithNeighboursAndOuterCells) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("new.tpb"), level));
+  const std::vector<char> old = withOldTetsAndOuterCells(bytesOf(dir.file("new.tpb")), level);
+  writeBytes(dir.file("old.tpb"), old, old.size());
+  Level back;
+  const LevelResult r = loadLevel(dir.file("old.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_EQ(back.tets.size(), level.tets.size());
+  EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
+  ASSERT_EQ(back.outerCells.size(), level.outerCells.size());
+  EXPECT_EQ(std::memcmp(back.outerCells.data(), level.outerCells.data(),
+                        level.outerCells.size() * sizeof(OuterCell)),
+            0);
+  // Saved again: the compact form, the same bytes as the level's own save.
+  ASSERT_TRUE(saveLevel(dir.file("again.tpb"), Level(back)));
+  Level again;
+  ASSERT_TRUE(loadLevel(dir.file("again.tpb"), again));
+  EXPECT_EQ(std::memcmp(again.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
+
+  const size_t tets = sectionOffset(old, "TETS"), outer = sectionOffset(old, "OUTC");
+  const struct {
+    size_t offset;
+    uint32_t value;
+    const char* needle;
+  } cases[] = {{tets + 16, uint32_t(level.tets.size()), "out of range"},         // tet 0 neighbour 0
+               {tets + 16, 0u, "out of range"},                                  // tet 0 its own neighbour
+               {outer + 12, uint32_t(level.tets.size()), "out of range"},        // outer cell 0's tet
+               {outer + 16, uint32_t(level.outerCells.size()), "out of range"},  // outer cell 0's link 0
+               {outer + 0, uint32_t(level.probes.size() + 3), "not a vertex"},   // outer cell 0's probe 0
+               {outer + 32, 0x7FC00000u, "not a unit vector"},                   // outer cell 0's normal: NaN
+               {outer + 76, 1u, "padding"}};
+  for (const auto& c : cases) {
+    std::vector<char> b = old;
+    putU32(b, c.offset, c.value);
+    fixPayloadCrc(b);
+    writeBytes(dir.file("forged.tpb"), b, b.size());
+    Level out;
+    const LevelResult f = loadLevel(dir.file("forged.tpb"), out);
+    EXPECT_EQ(f.status, LevelStatus::kCorrupt) << f.message;
+    EXPECT_NE(f.message.find(c.needle), std::string::npos) << f.message;
+    EXPECT_TRUE(emptyLevel(out));
+  }
+  std::string tetData(level.tets.size() * sizeof(Tet), '\0');
+  std::memcpy(tetData.data(), level.tets.data(), tetData.size());
+  const std::vector<char> both = withExtraSection(bytesOf(dir.file("new.tpb")), "TETS", 1, tetData);
+  writeBytes(dir.file("both.tpb"), both, both.size());
+  const LevelResult b = loadLevel(dir.file("both.tpb"), back);
+  EXPECT_EQ(b.status, LevelStatus::kCorrupt);
+  EXPECT_NE(b.message.find("TETS and TETC"), std::string::npos) << b.message;
 }
 
 // saveLevel writes SH in half precision (SHRH, 56 bytes a probe); levels written before, with float SH
@@ -519,8 +626,8 @@ TEST(LevelFile, RefusesUnknownRequiredSection) {
   EXPECT_EQ(loadLevel(dir.file("twice.tpb"), out).status, LevelStatus::kCorrupt);
 }
 
-// A level stored without outer cells (they are optional) still answers outside the hull from outer cells the
-// query builds itself, the same ones a stored level carries.
+// Outer cells are never stored (a function of the tets): a level saved with or without them loads without
+// them and answers outside the hull from outer cells the query builds itself, the ones the bake built.
 TEST(LevelFile, OuterCellsOptional) {
   TempDir dir;
   Level level = smallLevel();

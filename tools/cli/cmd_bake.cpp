@@ -308,7 +308,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const uint64_t fileBytes = std::filesystem::file_size(out);
   const uint64_t probeBytes = level.probes.size() * sizeof(glm::vec3);
   const uint64_t shBytes = level.sh.size() * sizeof(ShHalf);  // as stored (runtime/sh_half.h)
-  const uint64_t tetBytes = level.tets.size() * sizeof(Tet);
+  const uint64_t tetBytes = level.tets.size() * 16;  // as stored: four probe indices (level_format.md, TETC)
 
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
   std::printf("  scene   %zu triangles, %zu materials, %zu lights\n", scene.triangles.size(),
@@ -387,8 +387,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       "%zu bytes (%.1f per tet)\n",
       gridCells, double(grid.cellSize), grid.nodes.size(), grid.leaves, kDefaultLeafTets, grid.maxDepth,
       grid.meanDepth, gridBytes, level.tets.empty() ? 0.0 : double(gridBytes) / double(level.tets.size()));
-  std::printf("  bytes   %llu (probes %llu, SH %llu, tets %llu)\n", (unsigned long long)fileBytes,
-              (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
+  std::printf(
+      "  bytes   %llu in the file, %.0f per probe (probes %llu, SH %llu, tets %llu; `inspect` has every "
+      "section)\n",
+      (unsigned long long)fileBytes,
+      level.probes.empty() ? 0.0 : double(fileBytes) / double(level.probes.size()),
+      (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
   std::printf("  time   ");
   for (const auto& [stage, s] : stats.timings) std::printf(" %s %.2fs", stage.c_str(), s);
   std::printf("  (total %.2fs)\n", total);

@@ -8,10 +8,40 @@
 #include "commands.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/evaluate.h"
+#include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe::cli {
+namespace {
+
+struct FileSection {
+  std::string tag;
+  uint64_t bytes;
+};
+
+// The file's section table (docs/level_format.md: a u32 count at byte 72, 24-byte entries from byte 80: tag,
+// flags, offset, size, little-endian). Read only after loadLevel accepted the file, so the table is whole
+// and its checksum holds.
+std::vector<FileSection> fileSections(const std::string& path) {
+  std::vector<char> b;
+  std::string error;
+  if (!readFile(path, b, &error)) throw InputError(error);
+  const auto u = [&b](size_t at, int n) {
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v |= uint64_t(uint8_t(b[at + size_t(i)])) << (8 * i);
+    return v;
+  };
+  std::vector<FileSection> out;
+  const uint64_t count = u(72, 4);
+  for (uint64_t i = 0; i < count; ++i) {
+    const size_t e = 80 + 24 * size_t(i);
+    out.push_back({std::string(b.data() + e, 4), u(e + 16, 8)});
+  }
+  return out;
+}
+
+}  // namespace
 
 int cmdInspect(int argc, char** argv) {
   Args args("tetraprobe inspect LEVEL.tpb [--json]", "Prints the contents of a level file.",
@@ -52,6 +82,11 @@ int cmdInspect(int argc, char** argv) {
   nlohmann::json lookup = {{"total", lookupBytes}, {"per_probe", double(lookupBytes) / probes}};
   for (const ByteSection& s : sections)
     lookup["sections"][s.name] = {{"bytes", s.bytes}, {"per_probe", double(s.bytes) / probes}};
+  // What the file stores, by section (tets without neighbours, no outer cells: the load derives them).
+  const std::vector<FileSection> stored = fileSections(path);
+  nlohmann::json file = {{"total", bytes}, {"per_probe", double(bytes) / probes}};
+  for (const FileSection& s : stored)
+    file["sections"][s.tag] = {{"bytes", s.bytes}, {"per_probe", double(s.bytes) / probes}};
 
   // Probes by kind (Level::probeKinds), when the level records them.
   constexpr const char* kKindNames[kLevelProbeKindCount] = {
@@ -78,7 +113,8 @@ int cmdInspect(int argc, char** argv) {
                         {"bounds", {{"min", {wlo.x, wlo.y, wlo.z}}, {"max", {whi.x, whi.y, whi.z}}}},
                         {"probes", {{"count", level.probes.size()}, {"kinds", kinds}}},
                         {"tets", {{"count", level.tets.size()}, {"hull_faces", hull}}},
-                        {"outer_cells", level.outerCells.size()},
+                        {"outer_cells", query.outerCells().size()},
+                        {"outer_cells_stored", !level.outerCells.empty()},
                         {"locate",
                          {{"stored", !grid.slots.empty()},
                           {"cell_size_m", grid.cellSize},
@@ -90,12 +126,16 @@ int cmdInspect(int argc, char** argv) {
                           {"bytes", gridBytes}}},
                         {"occlusion_bytes", level.occlusion.bytes()},
                         {"lookup_bytes", lookup},
+                        {"file_bytes", file},
                         {"shader_variant", variant}};
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
   std::printf("%s\n", path.c_str());
-  std::printf("  bytes      %llu\n", (unsigned long long)bytes);
+  std::printf("  bytes      %llu in the file, %.0f per probe:", (unsigned long long)bytes,
+              double(bytes) / probes);
+  for (const FileSection& s : stored) std::printf(" %s %.0f", s.tag.c_str(), double(s.bytes) / probes);
+  std::printf("\n");
   std::printf("  generator  %s\n", level.generator.c_str());
   std::printf("  content    %s\n", content.c_str());
   std::printf("  SH order   L%u (RGB, %d coefficients)\n", level.shOrder, kShCoeffCount);
@@ -104,8 +144,8 @@ int cmdInspect(int argc, char** argv) {
               whi.z);
   std::printf("  probes     %zu (%s)\n", level.probes.size(),
               kindText.empty() ? "kinds not recorded" : kindText.c_str());
-  std::printf("  tets       %zu (%d hull faces), %zu outer cells\n", level.tets.size(), hull,
-              level.outerCells.size());
+  std::printf("  tets       %zu (%d hull faces), %zu outer cells%s\n", level.tets.size(), hull,
+              query.outerCells().size(), level.outerCells.empty() ? " (built on load)" : "");
   if (grid.slots.empty())
     std::printf("  locate     no cell grid stored (built on load)\n");
   else
