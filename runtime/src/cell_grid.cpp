@@ -39,6 +39,18 @@
 namespace tetraprobe {
 namespace {
 
+// The outward unit plane of the face opposite corners[f], in double; false for a flat face.
+bool exactFacePlane(const glm::vec3 corners[4], int f, glm::dvec4& plane) {
+  const glm::dvec3 p0(corners[(f + 1) & 3]), p1(corners[(f + 2) & 3]), p2(corners[(f + 3) & 3]);
+  glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+  const double len = glm::length(n);
+  if (!(len > 0.0)) return false;
+  n /= len;
+  if (glm::dot(n, glm::dvec3(corners[f]) - p0) > 0.0) n = -n;
+  plane = glm::dvec4(n, -glm::dot(n, p0));
+  return true;
+}
+
 constexpr int kMaxDepth = 64;
 constexpr size_t kAllFacesUpTo = 12;    // lists this short try every face of every tet as a split plane
 constexpr size_t kCandidateTets = 24;   // longer lists: the faces of this many evenly spread tets
@@ -249,18 +261,10 @@ class TreeBuilder {
 
   glm::dvec3 corner(int32_t t, int i) const { return glm::dvec3(corners_[4 * size_t(t) + size_t(i)]); }
 
-  // The outward unit plane of tet t's face opposite vertex f; false for a flat face.
+  // The outward unit plane of tet t's face opposite vertex f, in double; false for a flat face.
   bool facePlane(int32_t t, int f, glm::dvec4& plane) const {
-    const glm::dvec3 p0 = corner(t, (f + 1) & 3), p1 = corner(t, (f + 2) & 3), p2 = corner(t, (f + 3) & 3);
-    glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
-    const double len = glm::length(n);
-    if (!(len > 0.0)) return false;
-    n /= len;
-    if (glm::dot(n, corner(t, f) - p0) > 0.0) n = -n;
-    plane = glm::dvec4(n, -glm::dot(n, p0));
-    return true;
+    return exactFacePlane(&corners_[4 * size_t(t)], f, plane);
   }
-
   // -1 under, +1 over (vertices within the margin of the plane count as on it), 0 straddling.
   int classify(int32_t t, const glm::dvec4& plane) const {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -530,6 +534,13 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
     grid.maxProbe = 0;
   }
   return grid;
+}
+
+bool cellGridFacePlane(const glm::vec3 corners[4], int f, float plane[4]) {
+  glm::dvec4 exact;
+  if (!exactFacePlane(corners, f, exact)) return false;
+  for (int a = 0; a < 4; ++a) plane[a] = float(exact[a]);  // as choosePlane stores it
+  return true;
 }
 
 int32_t cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int* depth) {

@@ -36,7 +36,8 @@ constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
 constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficients x RGB f32
 constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
 constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // TETS (read only): v[4] i32, n[4] i32
-constexpr uint64_t kTetCompactBytes = 4 * 4;   // TETC: v[4] i32 (neighbours derived on load)
+// TETC: v[4], each levelProbeIndexBytes(P) bytes (2, 3 or 4; neighbours derived on load).
+constexpr uint64_t kMinTetCompactBytes = 4 * 2;
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
@@ -58,14 +59,49 @@ constexpr uint32_t tag(const char (&s)[5]) {
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
                    kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagGenerator = tag("GENR"),
-                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagOcclusion = tag("OCCL"),
-                   kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
+                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagCellGridFaces = tag("CGR3"),
+                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
 // retired CGRD section, leaves of several tets, is an unknown optional tag now: skipped, the grid rebuilt.)
 constexpr uint64_t kCellGridHeaderBytes = 64;
-constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24;
+// CGR3: the same header and slots; a node is the tet face its plane was cut from (u32 tet << 2 | face) and its
+// two children: 12 bytes instead of 24 (the loader recomputes the plane, cellGridFacePlane).
+constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24, kFaceNodeBytes = 12;
+constexpr uint64_t kMaxFaceNodeTets = uint64_t(1) << 30;  // tet << 2 | face fits a u32
+
+// For every node of `g`, the face (tet << 2 | face) whose cellGridFacePlane is the node's plane bit for bit;
+// false when some node has none (a grid not built by buildCellGrid: written as CGR2). Coplanar faces give the
+// same floats; the smallest reference is taken, so the output is a pure function of the level.
+bool nodeFaces(const Level& level, std::vector<uint32_t>& out) {
+  const CellGrid& g = level.cellGrid;
+  if (level.tets.size() >= kMaxFaceNodeTets) return false;
+  using Key = std::array<uint32_t, 4>;
+  std::vector<std::pair<Key, uint32_t>> faces;
+  faces.reserve(4 * level.tets.size());
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    glm::vec3 corners[4];
+    for (int i = 0; i < 4; ++i) corners[i] = level.probes[size_t(level.tets[t].v[i])];
+    for (int f = 0; f < 4; ++f) {
+      float plane[4];
+      if (!cellGridFacePlane(corners, f, plane)) continue;
+      Key k;
+      for (int a = 0; a < 4; ++a) k[size_t(a)] = std::bit_cast<uint32_t>(plane[a]);
+      faces.emplace_back(k, uint32_t(t) << 2 | uint32_t(f));
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  out.resize(g.nodes.size());
+  for (size_t n = 0; n < g.nodes.size(); ++n) {
+    Key k;
+    for (int a = 0; a < 4; ++a) k[size_t(a)] = std::bit_cast<uint32_t>(g.nodes[n].plane[a]);
+    const auto it = std::lower_bound(faces.begin(), faces.end(), std::make_pair(k, uint32_t(0)));
+    if (it == faces.end() || it->first != k) return false;
+    out[n] = it->second;
+  }
+  return true;
+}
 
 using runtime_detail::crc32;  // crc32.h
 
@@ -80,6 +116,9 @@ class Writer {
     for (int i = 0; i < 8; ++i) out_.push_back(char(uint8_t(v >> (8 * i))));
   }
   void i32(int32_t v) { u32(uint32_t(v)); }
+  void uN(uint32_t v, uint32_t n) {  // the low n bytes of v
+    for (uint32_t i = 0; i < n; ++i) out_.push_back(char(uint8_t(v >> (8 * i))));
+  }
   void i16(int16_t v) {
     out_.push_back(char(uint8_t(uint16_t(v))));
     out_.push_back(char(uint8_t(uint16_t(v) >> 8)));
@@ -116,6 +155,12 @@ class Reader {
     return v;
   }
   int32_t i32() { return int32_t(u32()); }
+  uint32_t uN(uint32_t n) {
+    uint32_t v = 0;
+    for (uint32_t i = 0; i < n; ++i) v |= uint32_t(p_[i]) << (8 * i);
+    p_ += n;
+    return v;
+  }
   int16_t i16() {
     const auto v = uint16_t(p_[0] | p_[1] << 8);
     p_ += 2;
@@ -386,14 +431,17 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   // Tets: vertices only. Neighbours and outer cells are functions of them (linkTetNeighbours on load,
   // buildOuterCells in ProbeQuery), so they are not stored: 16 + 80 x hull faces / tets bytes a tet less.
   sections.push_back({kTagTetsCompact, kSectionRequired, {}});
+  const uint32_t indexBytes = levelProbeIndexBytes(level.probes.size());
   for (const Tet& t : level.tets)
-    for (int32_t v : t.v) sections.back().bytes.i32(v);
+    for (int32_t v : t.v) sections.back().bytes.uN(uint32_t(v), indexBytes);
   sections.push_back({kTagGenerator, kSectionRequired, {}});
   sections.back().bytes.bytes(level.generator.data(), level.generator.size());
 
   if (!level.cellGrid.slots.empty()) {
     const CellGrid& g = level.cellGrid;
-    sections.push_back({kTagCellGrid, 0, {}});
+    std::vector<uint32_t> faces;
+    const bool byFace = nodeFaces(level, faces);
+    sections.push_back({byFace ? kTagCellGridFaces : kTagCellGrid, 0, {}});
     Writer& s = sections.back().bytes;
     for (int a = 0; a < 3; ++a) s.f32(g.min[a]);
     s.f32(g.cellSize);
@@ -408,8 +456,12 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
       for (int32_t k : slot.key) s.i32(k);
       s.i32(slot.root);
     }
-    for (const BspNode& node : g.nodes) {
-      for (float x : node.plane) s.f32(x);
+    for (size_t n = 0; n < g.nodes.size(); ++n) {
+      const BspNode& node = g.nodes[n];
+      if (byFace)
+        s.u32(faces[n]);
+      else
+        for (float x : node.plane) s.f32(x);
       for (int32_t c : node.child) s.i32(c);
     }
   }
@@ -516,7 +568,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                            std::to_string(generatorBytes) + " generator bytes");
   const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
   const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) +
-                           tetCount * kTetCompactBytes + generatorBytes + kTrailerBytes;
+                           tetCount * kMinTetCompactBytes + generatorBytes + kTrailerBytes;
   if (size < minimum)
     return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
                                              " bytes, the header needs at least " + std::to_string(minimum));
@@ -529,7 +581,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, occlusion, kinds, stream;
+  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridFaces, occlusion, kinds,
+      stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -539,18 +592,19 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     if ((flags & ~kSectionRequired) != 0 || offset != expected || bytes > kMaxSectionBytes)
       return fail(LevelStatus::kCorrupt, name + where + "bad flags, offset or size");
     expected += bytes;
-    Section* known = t == kTagProbes        ? &probes
-                     : t == kTagSh          ? &sh
-                     : t == kTagShHalf      ? &shHalf
-                     : t == kTagTets        ? &tets
-                     : t == kTagTetsCompact ? &tetsCompact
-                     : t == kTagGenerator   ? &generator
-                     : t == kTagOuterCells  ? &outer
-                     : t == kTagCellGrid    ? &cellGrid
-                     : t == kTagOcclusion   ? &occlusion
-                     : t == kTagProbeKinds  ? &kinds
-                     : t == kTagStream      ? &stream
-                                            : nullptr;
+    Section* known = t == kTagProbes          ? &probes
+                     : t == kTagSh            ? &sh
+                     : t == kTagShHalf        ? &shHalf
+                     : t == kTagTets          ? &tets
+                     : t == kTagTetsCompact   ? &tetsCompact
+                     : t == kTagGenerator     ? &generator
+                     : t == kTagOuterCells    ? &outer
+                     : t == kTagCellGrid      ? &cellGrid
+                     : t == kTagCellGridFaces ? &cellGridFaces
+                     : t == kTagOcclusion     ? &occlusion
+                     : t == kTagProbeKinds    ? &kinds
+                     : t == kTagStream        ? &stream
+                                              : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
         return fail(LevelStatus::kUnsupportedVersion,
@@ -589,7 +643,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
   // Tets: vertices only (TETC, what saveLevel writes) or with neighbours (TETS, levels written before it).
   if (tets.present && tetsCompact.present)
     return fail(LevelStatus::kCorrupt, name + "both TETS and TETC tet sections");
-  if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * kTetCompactBytes, "tet")
+  const uint32_t indexBytes = levelProbeIndexBytes(probeCount);
+  if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * 4 * indexBytes, "tet")
                                           : sized(tets, tetCount * kTetBytes, "tet");
       !e)
     return e;
@@ -602,15 +657,23 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     return fail(LevelStatus::kCorrupt, name + "probe kind section of " + std::to_string(kinds.size) +
                                            " bytes for " + std::to_string(probeCount) + " probes");
 
+  // The cell grid: nodes with their planes (CGR2) or with the tet faces the planes were cut from (CGR3).
+  if (cellGrid.present && cellGridFaces.present)
+    return fail(LevelStatus::kCorrupt, name + "both CGR2 and CGR3 cell grid sections");
+  const bool gridByFace = cellGridFaces.present;
+  if (gridByFace && !tetsCompact.present)  // written together; CGR3 names tets the TETC parse range-checks
+    return fail(LevelStatus::kCorrupt, name + "a CGR3 cell grid with TETS tets");
+  const Section& grid = gridByFace ? cellGridFaces : cellGrid;
+  const uint64_t nodeBytes = gridByFace ? kFaceNodeBytes : kNodeBytes;
   uint64_t gridSlots = 0, gridNodes = 0;
-  if (cellGrid.present) {
-    if (cellGrid.size < kCellGridHeaderBytes)
+  if (grid.present) {
+    if (grid.size < kCellGridHeaderBytes)
       return fail(LevelStatus::kCorrupt, name + "cell grid section shorter than its header");
-    Reader counts(data + cellGrid.offset + 48);
+    Reader counts(data + grid.offset + 48);
     gridSlots = counts.u64();
     gridNodes = counts.u64();
     if (gridSlots > kMaxCount || gridNodes > kMaxCount ||
-        cellGrid.size != kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * kNodeBytes)
+        grid.size != kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * nodeBytes)
       return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
   }
 
@@ -665,10 +728,11 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     for (size_t t = 0; t < level.tets.size(); ++t) {
       Tet& tet = level.tets[t];
       for (int i = 0; i < 4; ++i) {
-        tet.v[i] = body.i32();
+        const uint32_t v = body.uN(indexBytes);
+        tet.v[i] = int32_t(v);
         tet.n[i] = -1;
         // linkTetNeighbours' precondition (validateLevel repeats these checks on the result).
-        if (tet.v[i] < 0 || uint64_t(tet.v[i]) >= probeCount)
+        if (v >= probeCount)
           return fail(LevelStatus::kCorrupt, name + "tet " + std::to_string(t) + ": vertex " +
                                                  std::to_string(tet.v[i]) + " out of range (" +
                                                  std::to_string(probeCount) + " probes)");
@@ -705,9 +769,9 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     }
   }
 
-  if (cellGrid.present) {
+  if (grid.present) {
     CellGrid& g = level.cellGrid;
-    body = Reader(data + cellGrid.offset);
+    body = Reader(data + grid.offset);
     for (int a = 0; a < 3; ++a) g.min[a] = body.f32();
     g.cellSize = body.f32();
     g.maxProbe = body.u32();
@@ -722,8 +786,26 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       slot.root = body.i32();
     }
     g.nodes.resize(size_t(gridNodes));
-    for (BspNode& node : g.nodes) {
-      for (float& x : node.plane) x = body.f32();
+    for (size_t n = 0; n < g.nodes.size(); ++n) {
+      BspNode& node = g.nodes[n];
+      if (gridByFace) {
+        // The plane is recomputed from the face, as buildCellGrid computed it (cellGridFacePlane).
+        const uint32_t ref = body.u32();
+        const uint32_t t = ref >> 2;
+        const int f = int(ref & 3);
+        if (t >= level.tets.size())
+          return fail(LevelStatus::kCorrupt, name + "cell grid node " + std::to_string(n) + " names tet " +
+                                                 std::to_string(t) + " of " +
+                                                 std::to_string(level.tets.size()));
+        glm::vec3 corners[4];
+        for (int i = 0; i < 4; ++i) corners[i] = level.probes[size_t(level.tets[t].v[i])];
+        if (!cellGridFacePlane(corners, f, node.plane))
+          return fail(LevelStatus::kCorrupt, name + "cell grid node " + std::to_string(n) + " names face " +
+                                                 std::to_string(f) + " of tet " + std::to_string(t) +
+                                                 ", which is flat");
+      } else {
+        for (float& x : node.plane) x = body.f32();
+      }
       for (int32_t& c : node.child) c = body.i32();
     }
   }

@@ -104,10 +104,11 @@ size_t indexOf(const std::vector<uint32_t>& sorted, uint32_t v) {
 struct StreamingLevel::File {
   std::ifstream in;
   uint64_t probes = 0, sh = 0, tets = 0;  // section offsets
-  uint64_t tetRecord = 16;                // tet bytes: 16 (TETC, vertices) or 32 (TETS, with neighbours)
-  uint64_t shRecord = 108;                // SH bytes a probe: 108 (SHRG, float) or 56 (SHRH, ShHalf)
-  uint64_t occl = 0;                      // 0: no occlusion section
-  uint64_t strm = 0;                      // the streaming index section
+  uint64_t tetRecord =
+      32;  // tet bytes: 4 x levelProbeIndexBytes (TETC, probes) or 32 (TETS, with neighbours)
+  uint64_t shRecord = 108;  // SH bytes a probe: 108 (SHRG, float) or 56 (SHRH, ShHalf)
+  uint64_t occl = 0;        // 0: no occlusion section
+  uint64_t strm = 0;        // the streaming index section
   uint64_t probeCount = 0, tetCount = 0, planeCount = 0, blockCount = 0;
   uint32_t content = 0, shOrder = 2;
 
@@ -201,7 +202,7 @@ LevelResult StreamingLevel::open(const std::string& path) {
     if (t == tag("TETS") || t == tag("TETC")) {
       if (haveTets) return fail(LevelStatus::kCorrupt, name + "more than one tet section");
       f->tets = offset, tetsSize = bytes, haveTets = true;
-      f->tetRecord = t == tag("TETC") ? 16 : 32;
+      f->tetRecord = t == tag("TETC") ? 4 * levelProbeIndexBytes(f->probeCount) : 32;
     }
     if (t == tag("OCCL")) f->occl = offset, occlSize = bytes;
     if (t == tag("STRM")) strm = offset, strmSize = bytes;
@@ -372,10 +373,15 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
   // The records, read where the level keeps them.
   uint8_t buf[108];
   for (uint32_t t : s->tetIds) {
-    if (!f.read(f.tets + f.tetRecord * t, buf, 16))
+    const uint64_t indexBytes = f.tetRecord == 32 ? 4 : f.tetRecord / 4;  // TETS: i32 probes, then neighbours
+    if (!f.read(f.tets + f.tetRecord * t, buf, size_t(4 * indexBytes)))
       return fail(LevelStatus::kCannotOpen, where + "read failed");
     Tet rec;  // neighbours: linked among the loaded tets when the fine level is assembled
-    for (int k = 0; k < 4; ++k) rec.v[k] = i32At(buf + 4 * k), rec.n[k] = -1;
+    for (int k = 0; k < 4; ++k) {
+      uint32_t v = 0;
+      for (uint64_t b = 0; b < indexBytes; ++b) v |= uint32_t(buf[indexBytes * uint64_t(k) + b]) << (8 * b);
+      rec.v[k] = int32_t(v), rec.n[k] = -1;
+    }
     for (int k = 0; k < 4; ++k) {
       const int32_t v = rec.v[k];
       if (v < 0 || !std::binary_search(s->probeIds.begin(), s->probeIds.end(), uint32_t(v)))

@@ -95,9 +95,19 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   ASSERT_EQ(run("inspect " + good.string()).code, 0);
 
   const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tets = section(level, "TETC"),
-               cgr2 = section(level, "CGR2"), kind = section(level, "KIND");
-  const uint64_t tetCount = getU64(level, 56);
+               cgr3 = section(level, "CGR3"), kind = section(level, "KIND");
+  const uint64_t probeCount = getU64(level, 48), tetCount = getU64(level, 56);
   ASSERT_GE(tetCount, 4u);
+  // TETC records: four probe indices of 2 bytes each below 65,536 probes (docs/level_format.md).
+  ASSERT_LE(probeCount, 65536u);
+  const auto indexAt = [tets](uint64_t t, int i) { return tets + 2 * (4 * size_t(t) + size_t(i)); };
+  const auto getIndex = [indexAt](const Bytes& b, uint64_t t, int i) {
+    return uint32_t(uint8_t(b[indexAt(t, i)])) | uint32_t(uint8_t(b[indexAt(t, i) + 1])) << 8;
+  };
+  const auto putIndex = [indexAt](Bytes& b, uint64_t t, int i, uint32_t v) {
+    b[indexAt(t, i)] = char(uint8_t(v));
+    b[indexAt(t, i) + 1] = char(uint8_t(v >> 8));
+  };
 
   struct Case {
     std::string name;
@@ -148,27 +158,30 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
       {"sh_scale_zero", [&](Bytes& b) { putU32(b, shrh + 52, getU32(b, shrh + 52) & 0xFFFFu); }, true},
       {"sh_scale_negative",
        [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0xBC000000u); }, true},
-      {"vertex_out_of_range", [&](Bytes& b) { putU32(b, tets + 4, 1u << 30); }, true},
-      {"vertex_negative", [&](Bytes& b) { putU32(b, tets + 8, uint32_t(-7)); }, true},
-      {"vertex_repeated", [&](Bytes& b) { putU32(b, tets + 4, getU32(b, tets)); }, true},
+      {"vertex_out_of_range", [&](Bytes& b) { putIndex(b, 0, 1, 1u << 15); }, true},
+      {"vertex_at_probe_count", [&](Bytes& b) { putIndex(b, 1, 2, uint32_t(probeCount)); }, true},
+      {"vertex_repeated", [&](Bytes& b) { putIndex(b, 0, 1, getIndex(b, 0, 0)); }, true},
       // Neighbours are derived from the tets' probes on load: a tet copied over another gives faces of
       // three tets (not a tetrahedralization: a walk could not know which way to go).
       {"tet_copied_over_another",
        [&](Bytes& b) {
-         const size_t victim = size_t(tetCount / 2);
-         std::memmove(b.data() + tets + 16 * victim, b.data() + tets, 16);
+         for (int i = 0; i < 4; ++i) putIndex(b, tetCount / 2, i, getIndex(b, 0, i));
        },
        true},
       // Tet 0's second probe moved onto its first: flat in float (the build refuses such tets too).
       {"flat_tet",
        [&](Bytes& b) {
-         const size_t from = prbs + 12 * size_t(getU32(b, tets)),
-                      to = prbs + 12 * size_t(getU32(b, tets + 4));
+         const size_t from = prbs + 12 * size_t(getIndex(b, 0, 0)),
+                      to = prbs + 12 * size_t(getIndex(b, 0, 1));
          std::memmove(b.data() + to, b.data() + from, 12);
        },
        true},
-      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr2 + 12, 0.0f); }, true},
-      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr2 + 48, 1ull << 33); }, true},
+      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr3 + 12, 0.0f); }, true},
+      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr3 + 48, 1ull << 33); }, true},
+      // CGR3 node 0 names its plane's face by tet << 2 | face: a tet past the last.
+      {"grid_node_face_of_missing_tet",
+       [&](Bytes& b) { putU32(b, size_t(cgr3 + 64 + 16 * getU64(b, cgr3 + 48)), uint32_t(tetCount) << 2); },
+       true},
       {"probe_kind_unknown", [&](Bytes& b) { b[kind] = 200; }, true},
   };
 

@@ -7,10 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <map>
 #include <random>
+#include <set>
 
 #include <glm/geometric.hpp>
 
@@ -342,6 +345,39 @@ TEST(CellGrid, DeterministicForAnyThreadCount) {
     ASSERT_EQ(a.slots.size(), b.slots.size());
     EXPECT_EQ(std::memcmp(a.slots.data(), b.slots.data(), a.slots.size() * sizeof(CellSlot)), 0);
   }
+}
+
+// The level file stores a node as the tet face its plane was cut from (CGR3) and recomputes the plane on load
+// with cellGridFacePlane: that holds only if every node plane is, bit for bit, some face's cellGridFacePlane.
+TEST(CellGrid, EveryNodePlaneIsTheFloatPlaneOfATetFace) {
+  for (const Level& level : {ballLevel(), boxLevel(), latticeLevel()}) {
+    std::set<std::array<uint32_t, 4>> faces;
+    for (const Tet& t : level.tets) {
+      glm::vec3 corners[4];
+      for (int i = 0; i < 4; ++i) corners[i] = level.probes[size_t(t.v[i])];
+      for (int f = 0; f < 4; ++f) {
+        float plane[4];
+        ASSERT_TRUE(cellGridFacePlane(corners, f, plane));
+        faces.insert({std::bit_cast<uint32_t>(plane[0]), std::bit_cast<uint32_t>(plane[1]),
+                      std::bit_cast<uint32_t>(plane[2]), std::bit_cast<uint32_t>(plane[3])});
+      }
+    }
+    const CellGrid grid = buildCellGrid(level.probes, level.tets, 4.0f, 2);
+    ASSERT_GT(grid.nodes.size(), 10u);
+    for (const BspNode& node : grid.nodes)
+      EXPECT_TRUE(
+          faces.count({std::bit_cast<uint32_t>(node.plane[0]), std::bit_cast<uint32_t>(node.plane[1]),
+                       std::bit_cast<uint32_t>(node.plane[2]), std::bit_cast<uint32_t>(node.plane[3])}));
+  }
+  // A face with collinear corners has no plane: false, not a NaN plane.
+  const glm::vec3 flat[4] = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {0, 1, 0}};
+  float plane[4];
+  EXPECT_FALSE(cellGridFacePlane(flat, 3, plane));
+  // Face 0 (corners 1-3) is not flat: a unit normal, its corners on the plane.
+  ASSERT_TRUE(cellGridFacePlane(flat, 0, plane));
+  const glm::vec3 normal(plane[0], plane[1], plane[2]);
+  EXPECT_NEAR(glm::length(normal), 1.0f, 1e-6f);
+  for (int i = 1; i < 4; ++i) EXPECT_NEAR(glm::dot(normal, flat[i]) + plane[3], 0.0f, 1e-6f);
 }
 
 // The tets' adjacency distance (steps across shared faces) from tet `from` to tet `to`, by breadth-first

@@ -183,11 +183,14 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
   // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 68 bytes per
-  // probe (12 position + 56 half-precision SH), 16 per tet (its probes), the generator, the cell grid
-  // (64-byte header, 16 per slot, 24 per node), a 4-byte CRC.
+  // probe (12 position + 56 half-precision SH), 8 per tet (its probes, 2 bytes each below 65,536 probes),
+  // the generator, the cell grid (64-byte header, 16 per slot, 12 per node: the face its plane was cut from
+  // and two children; CGR3), a 4-byte CRC.
+  ASSERT_EQ(levelProbeIndexBytes(level.probes.size()), 2u);
   EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() +
-                                                   16 * level.tets.size() + level.generator.size() + 64 +
-                                                   16 * g.slots.size() + 24 * g.nodes.size() + 4);
+                                                   8 * level.tets.size() + level.generator.size() + 64 +
+                                                   16 * g.slots.size() + 12 * g.nodes.size() + 4);
+  EXPECT_NE(sectionOffset(bytesOf(dir.file("a.tpb")), "CGR3"), 0u);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -233,7 +236,7 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
   const size_t tets = sectionOffset(full, "TETC");
-  const size_t grid = sectionOffset(full, "CGR2"), slots = grid + 64,
+  const size_t grid = sectionOffset(full, "CGR3"), slots = grid + 64,
                nodes = slots + 16 * level.cellGrid.slots.size();
   ASSERT_FALSE(level.cellGrid.nodes.empty());
   size_t usedSlot = 0;
@@ -242,16 +245,20 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
     size_t offset;
     uint32_t value;
     const char* needle;
-  } cases[] = {{tets + 0, uint32_t(level.probes.size()), "out of range"},   // tet 0 vertex 0
-               {tets + 4, uint32_t(-7), "out of range"},                    // tet 0 vertex 1
-               {tets + 16, uint32_t(level.probes.size()), "out of range"},  // tet 1 vertex 0
-               {tets + 4, uint32_t(level.tets[0].v[0]), "repeated"},        // tet 0 vertex 1 = vertex 0
-               {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
-               {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
-               {nodes + 16, 0u, "child out of range"},  // node 0's under child: itself, not a later node
-               {nodes + 20, uint32_t(~int32_t(level.tets.size() + 2)), "child out of range"},
-               {nodes + 4, 0x7F800000u, "not finite"},
-               {grid + 12, 0x7FC00000u, "cell size"}};
+  } cases[] = {
+      {tets + 0, uint32_t(level.probes.size()) | uint32_t(level.tets[0].v[1]) << 16,
+       "out of range"},  // tet 0 vertex 0 (2-byte indices: vertex 1 kept)
+      {tets + 8, uint32_t(level.probes.size()) | uint32_t(level.tets[1].v[1]) << 16,
+       "out of range"},  // tet 1 vertex 0
+      {tets + 0, uint32_t(level.tets[0].v[0]) | uint32_t(level.tets[0].v[0]) << 16,
+       "repeated"},  // tet 0 vertex 1 = vertex 0
+      {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
+      {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
+      {nodes + 4, 0u, "child out of range"},  // node 0's under child: itself, not a later node
+      {nodes + 8, uint32_t(~int32_t(level.tets.size() + 2)), "child out of range"},
+      {nodes + 0, uint32_t(level.tets.size()) << 2, "names tet"},  // node 0's face: a tet past the end
+      {nodes + 12, ~0u, "names tet"},
+      {grid + 12, 0x7FC00000u, "cell size"}};
   for (const auto& c : cases) {
     std::vector<char> b = full;
     putU32(b, c.offset, c.value);
@@ -263,6 +270,42 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
     EXPECT_NE(r.message.find(c.needle), std::string::npos) << r.message;
     EXPECT_TRUE(emptyLevel(out));
   }
+}
+
+// Tet records hold each probe index in the fewest bytes that reach every probe: 2 up to 65,536 probes, 3
+// above (and 4 above 2^24, the same code with n = 4). A level of 65,600 probes whose tets name probes beyond
+// 2^16 round-trips exactly, at 12 bytes a tet.
+TEST(LevelFile, ProbeIndicesTakeThreeBytesAbove65536Probes) {
+  EXPECT_EQ(levelProbeIndexBytes(0), 2u);
+  EXPECT_EQ(levelProbeIndexBytes(65536), 2u);
+  EXPECT_EQ(levelProbeIndexBytes(65537), 3u);
+  EXPECT_EQ(levelProbeIndexBytes(uint64_t(1) << 24), 3u);
+  EXPECT_EQ(levelProbeIndexBytes((uint64_t(1) << 24) + 1), 4u);
+  TempDir dir;
+  const Level small = smallLevel();
+  Level level = small;
+  const size_t extra = 65600 - small.probes.size();  // probes no tet names, far from the small level
+  level.probes.clear();
+  level.sh.clear();
+  for (size_t i = 0; i < extra; ++i) {
+    level.probes.emplace_back(100.0f + float(i % 256), 100.0f + float(i / 256), 0.0f);
+    level.sh.push_back(ShRgb{});
+  }
+  level.probes.insert(level.probes.end(), small.probes.begin(), small.probes.end());
+  level.sh.insert(level.sh.end(), small.sh.begin(), small.sh.end());
+  for (Tet& t : level.tets)
+    for (int32_t& v : t.v) v += int32_t(extra);
+  level.outerCells.clear();
+  level.cellGrid = CellGrid{};
+  ASSERT_TRUE(saveLevel(dir.file("wide.tpb"), level));
+  const std::vector<char> b = bytesOf(dir.file("wide.tpb"));
+  const size_t tets = sectionOffset(b, "TETC"), generator = sectionOffset(b, "GENR");
+  EXPECT_EQ(generator - tets, 12 * level.tets.size());
+  Level back;
+  const LevelResult r = loadLevel(dir.file("wide.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_EQ(back.tets.size(), level.tets.size());
+  EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
 }
 
 // Neighbours are derived from the stored probes of each tet (linkTetNeighbours): a file whose tets do not
@@ -281,8 +324,10 @@ TEST(LevelFile, RefusesTetsThatShareAFaceThreeWays) {
   ASSERT_LT(interior, level.tets.size());
   const size_t victim = interior == 0 ? 1 : 0;
   std::vector<char> b = full;
-  for (int i = 0; i < 4; ++i)
-    putU32(b, tets + 16 * victim + 4 * size_t(i), uint32_t(level.tets[interior].v[i]));
+  for (int i = 0; i < 4; ++i) {  // 2-byte indices (below 65,536 probes)
+    b[tets + 8 * victim + 2 * size_t(i)] = char(uint8_t(level.tets[interior].v[i]));
+    b[tets + 8 * victim + 2 * size_t(i) + 1] = char(uint8_t(level.tets[interior].v[i] >> 8));
+  }
   fixPayloadCrc(b);
   writeBytes(dir.file("forged.tpb"), b, b.size());
   Level out;
@@ -464,8 +509,33 @@ std::vector<char> withFloatShSection(const std::vector<char>& full, const std::v
   return withSectionReplaced(full, "SHRH", "SHRG", floats);
 }
 
-// The file as written before TETC: 32-byte tets with their neighbours (TETS) and the outer cells (OUTC,
-// 80-byte records, appended as the last section).
+// The cell grid as written before CGR3 (CGR2: the same 64-byte header and 16-byte slots, 24-byte nodes with
+// their float planes).
+std::string cellGridWithPlanes(const CellGrid& g) {
+  std::string out;
+  const auto put = [&out](const auto& v) { out.append(reinterpret_cast<const char*>(&v), sizeof(v)); };
+  for (int a = 0; a < 3; ++a) put(g.min[a]);
+  put(g.cellSize);
+  put(g.maxProbe);
+  put(g.maxDepth);
+  put(g.meanDepth);
+  put(uint64_t(g.leaves));
+  put(uint64_t(g.unprovenLeaves));
+  put(uint64_t(g.slots.size()));
+  put(uint64_t(g.nodes.size()));
+  for (const CellSlot& slot : g.slots) {
+    for (int32_t k : slot.key) put(k);
+    put(slot.root);
+  }
+  for (const BspNode& node : g.nodes) {
+    for (float x : node.plane) put(x);
+    for (int32_t c : node.child) put(c);
+  }
+  return out;
+}
+
+// The file as written before TETC: 32-byte tets with their neighbours (TETS), the outer cells (OUTC, 80-byte
+// records, appended as the last section) and the grid's nodes with their planes (CGR2).
 std::vector<char> withOldTetsAndOuterCells(const std::vector<char>& full, const Level& level) {
   std::string tets(level.tets.size() * sizeof(Tet), '\0');
   std::memcpy(tets.data(), level.tets.data(), tets.size());  // v[4], n[4] little-endian i32, the old record
@@ -479,7 +549,9 @@ std::vector<char> withOldTetsAndOuterCells(const std::vector<char>& full, const 
     for (const auto& nrm : c.normal) put(nrm, 12);
     cells.append(12, '\0');
   }
-  return withExtraSection(withSectionReplaced(full, "TETC", "TETS", tets), "OUTC", 0, cells);
+  return withExtraSection(withSectionReplaced(withSectionReplaced(full, "TETC", "TETS", tets), "CGR3", "CGR2",
+                                              cellGridWithPlanes(level.cellGrid)),
+                          "OUTC", 0, cells);
 }
 
 // Levels written before TETC (tets with neighbours, and outer cells) still load, as written; their
@@ -499,6 +571,10 @@ TEST(LevelFile, ReadsOldTetsWithNeighboursAndOuterCells) {
   ASSERT_EQ(back.outerCells.size(), level.outerCells.size());
   EXPECT_EQ(std::memcmp(back.outerCells.data(), level.outerCells.data(),
                         level.outerCells.size() * sizeof(OuterCell)),
+            0);
+  ASSERT_EQ(back.cellGrid.nodes.size(), level.cellGrid.nodes.size());
+  EXPECT_EQ(std::memcmp(back.cellGrid.nodes.data(), level.cellGrid.nodes.data(),
+                        level.cellGrid.nodes.size() * sizeof(BspNode)),
             0);
   // Saved again: the compact form, the same bytes as the level's own save.
   ASSERT_TRUE(saveLevel(dir.file("again.tpb"), Level(back)));
@@ -609,6 +685,34 @@ TEST(LevelFile, RetiredCellGridSectionIsSkippedAndRebuilt) {
     EXPECT_EQ(a.tet, c.tet);
     EXPECT_EQ(a.weights, c.weights);
   }
+}
+
+// saveLevel stores a node as the tet face its plane was cut from (CGR3) only when every node's plane is such
+// a face bit for bit; a grid built some other way (here: one plane nudged by an ulp) is written with its
+// planes (CGR2, the format of earlier levels), which still loads bit for bit. A file with both is refused.
+TEST(LevelFile, GridNotCutFromTetFacesIsWrittenWithItsPlanes) {
+  TempDir dir;
+  Level level = smallLevel();
+  ASSERT_FALSE(level.cellGrid.nodes.empty());
+  float& w = level.cellGrid.nodes.back().plane[3];
+  w = std::nextafter(w, 1e30f);
+  ASSERT_TRUE(saveLevel(dir.file("planes.tpb"), level));
+  const std::vector<char> full = bytesOf(dir.file("planes.tpb"));
+  EXPECT_NE(sectionOffset(full, "CGR2"), 0u);
+  Level back;
+  const LevelResult r = loadLevel(dir.file("planes.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_EQ(back.cellGrid.nodes.size(), level.cellGrid.nodes.size());
+  EXPECT_EQ(std::memcmp(back.cellGrid.nodes.data(), level.cellGrid.nodes.data(),
+                        level.cellGrid.nodes.size() * sizeof(BspNode)),
+            0);
+
+  const std::vector<char> both = withExtraSection(full, "CGR3", 0, std::string(64, '\0'));
+  writeBytes(dir.file("both.tpb"), both, both.size());
+  Level out;
+  const LevelResult rb = loadLevel(dir.file("both.tpb"), out);
+  EXPECT_EQ(rb.status, LevelStatus::kCorrupt);
+  EXPECT_NE(rb.message.find("both CGR2 and CGR3"), std::string::npos) << rb.message;
 }
 
 // A section flagged as required that this reader does not know must not be ignored.

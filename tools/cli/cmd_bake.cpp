@@ -308,7 +308,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const uint64_t fileBytes = std::filesystem::file_size(out);
   const uint64_t probeBytes = level.probes.size() * sizeof(glm::vec3);
   const uint64_t shBytes = level.sh.size() * sizeof(ShHalf);  // as stored (runtime/sh_half.h)
-  const uint64_t tetBytes = level.tets.size() * 16;  // as stored: four probe indices (level_format.md, TETC)
+  // As stored: four probe indices of 2-4 bytes each (level_format.md, TETC).
+  const uint64_t tetBytes = level.tets.size() * 4 * levelProbeIndexBytes(level.probes.size());
 
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
   std::printf("  scene   %zu triangles, %zu materials, %zu lights\n", scene.triangles.size(),
@@ -384,7 +385,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   std::printf(
       "  locate  %zu cells of %g m, BSP %zu nodes, %zu leaves (at most %d tets each), depth max %d mean "
       "%.1f; "
-      "%zu bytes (%.1f per tet)\n",
+      "%zu bytes in memory (%.1f per tet)\n",
       gridCells, double(grid.cellSize), grid.nodes.size(), grid.leaves, kDefaultLeafTets, grid.maxDepth,
       grid.meanDepth, gridBytes, level.tets.empty() ? 0.0 : double(gridBytes) / double(level.tets.size()));
   std::printf(

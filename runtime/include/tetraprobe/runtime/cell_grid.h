@@ -95,6 +95,13 @@ inline constexpr int kDefaultLeafTets = 6;
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets,
                        float cellSize = 16.0f, int threads = 0, int leafTets = kDefaultLeafTets);
 
+// The split plane buildCellGrid cuts from a tet face: the face opposite corners[f] (corners: the tet's four
+// probe positions in its v order), unit outward normal (away from corners[f]) and offset, computed in double
+// and rounded to float (`plane`, what a BspNode stores). False for a flat face. Every node plane
+// buildCellGrid makes is one of these, which lets the level file store a node as the face it was cut from
+// (docs/level_format.md, CGR3) and the loader recompute the same floats.
+bool cellGridFacePlane(const glm::vec3 corners[4], int f, float plane[4]);
+
 // The tet named by the leaf holding local point x, or -1 (x's cell is absent or its leaf empty: x is then
 // outside every tet overlapping the grid, up to rounding). `depth` (optional) gets the nodes descended.
 int32_t cellGridLeaf(const CellGrid& grid, const glm::dvec3& x, int* depth = nullptr);

@@ -134,6 +134,12 @@ struct LevelResult {
 // The level file format version this reader and writer implement (docs/level_format.md, version policy).
 inline constexpr uint32_t kLevelFormatVersion = 4;
 
+// Bytes one probe index takes in the level file's tet records (`TETC`, docs/level_format.md): the fewest
+// that hold every index of a level of `probeCount` probes (2 up to 65,536 probes, 3 up to 2^24, else 4).
+inline constexpr uint32_t levelProbeIndexBytes(uint64_t probeCount) {
+  return probeCount <= (uint64_t(1) << 16) ? 2u : probeCount <= (uint64_t(1) << 24) ? 3u : 4u;
+}
+
 // The default byte limit of loadLevel: 4 GiB (a placed level of a million probes is about 0.4 GiB).
 inline constexpr uint64_t kDefaultMaxLevelBytes = uint64_t(4) << 30;
 
