@@ -1,8 +1,11 @@
-// What loading a level costs now that the file stores tets without neighbours and no outer cells: the whole
-// loadLevelFromMemory (parse, derive neighbours, validate), the neighbour derivation alone, the outer cells
-// ProbeQuery builds, and peers in the same run: loading the same level written the old way (tets with their
-// neighbours, TETS) and copying the file's bytes (the floor of any load). Rates are
-// probes/s on a synthetic level (n^3 probes on a jittered 1 m grid, Delaunay tets, no cell grid).
+// What loading a level costs now that the file stores what the load can derive: tets without neighbours
+// (TETC, 2-byte indices here), no outer cells, BSP nodes as the tet faces of their planes (CGR3) and packed
+// occlusion (OCC2). Measured: the whole loadLevelFromMemory (parse, derive neighbours, recompute planes,
+// validate), the neighbour derivation alone, the outer cells ProbeQuery builds, and peers in the same run:
+// loading the same level written the session-12 way (TETS tets with neighbours, CGR2 float planes, OCCL
+// fixed records) and copying the file's bytes (the floor of any load). Rates are probes/s on a synthetic
+// level (n^3 probes on a jittered 1 m grid, Delaunay tets, the default cell grid, one occlusion plane on
+// every third tet).
 #include <benchmark/benchmark.h>
 
 #include <unistd.h>
@@ -28,7 +31,7 @@ using namespace tetraprobe;
 struct Fixture {
   Level level;
   std::vector<char> file;     // the level as saveLevel writes it (TETC: tets without neighbours)
-  std::vector<char> oldFile;  // the same level as written before TETC (TETS: 32-byte tets with neighbours)
+  std::vector<char> oldFile;  // the same level as written in session 12 (TETS, CGR2, OCCL)
 };
 
 uint64_t getU(const std::vector<char>& b, size_t at, int n) {
@@ -48,8 +51,39 @@ uint32_t crc32(const char* p, size_t n) {  // the format's CRC-32 (zlib)
   return c ^ 0xFFFFFFFFu;
 }
 
-// `file` with its TETC section replaced by TETS records of `tets` (docs/level_format.md), checksums fixed.
-std::vector<char> withOldTets(const std::vector<char>& file, const std::vector<Tet>& tets) {
+template <class T>
+void append(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof(v));  // little-endian, as the format stores it
+}
+
+// The sections of the session-12 format (docs/level_format.md) for `level`: TETS, CGR2 and OCCL payloads.
+std::map<std::string, std::pair<std::string, std::string>> oldSections(const Level& level) {
+  std::string tets(reinterpret_cast<const char*>(level.tets.data()), level.tets.size() * sizeof(Tet));
+  std::string grid;
+  const CellGrid& g = level.cellGrid;
+  for (int a = 0; a < 3; ++a) append(grid, g.min[a]);
+  append(grid, g.cellSize);
+  append(grid, g.maxProbe);
+  append(grid, g.maxDepth);
+  append(grid, g.meanDepth);
+  for (uint64_t v :
+       {uint64_t(g.leaves), uint64_t(g.unprovenLeaves), uint64_t(g.slots.size()), uint64_t(g.nodes.size())})
+    append(grid, v);
+  for (const CellSlot& slot : g.slots) grid.append(reinterpret_cast<const char*>(&slot), sizeof(slot));
+  for (const BspNode& node : g.nodes) grid.append(reinterpret_cast<const char*>(&node), sizeof(node));
+  std::string occ;
+  const LevelOcclusion& o = level.occlusion;
+  for (uint64_t v : {uint64_t(o.tets.size()), uint64_t(o.planes.size()),
+                     uint64_t(o.shadowMaps.size() / kShadowMapBlockBytes)})
+    append(occ, v);
+  occ.append(reinterpret_cast<const char*>(o.tets.data()), o.tets.size() * sizeof(TetOcclusion));
+  occ.append(reinterpret_cast<const char*>(o.planes.data()), o.planes.size() * sizeof(OcclusionPlane));
+  return {{"TETC", {"TETS", tets}}, {"CGR3", {"CGR2", grid}}, {"OCC2", {"OCCL", occ}}};
+}
+
+// `file` with its TETC, CGR3 and OCC2 sections replaced by the session-12 ones, checksums fixed.
+std::vector<char> withOldSections(const std::vector<char>& file, const Level& level) {
+  const auto replaced = oldSections(level);
   const size_t n = size_t(getU(file, 72, 4)), tableEnd = 80 + 24 * n + 4;
   std::vector<char> b(file.begin(), file.begin() + std::ptrdiff_t(tableEnd));
   int64_t shift = 0;
@@ -57,12 +91,13 @@ std::vector<char> withOldTets(const std::vector<char>& file, const std::vector<T
     const size_t e = 80 + 24 * i;
     const uint64_t offset = getU(file, e + 8, 8), size = getU(file, e + 16, 8);
     putU(b, e + 8, uint64_t(int64_t(offset) + shift), 8);
-    if (std::memcmp(file.data() + e, "TETC", 4) == 0) {
-      std::memcpy(b.data() + e, "TETS", 4);
-      putU(b, e + 16, tets.size() * sizeof(Tet), 8);
-      const char* p = reinterpret_cast<const char*>(tets.data());  // v[4], n[4] little-endian i32
-      b.insert(b.end(), p, p + tets.size() * sizeof(Tet));
-      shift += int64_t(tets.size() * sizeof(Tet)) - int64_t(size);
+    if (const auto it = replaced.find(std::string(file.data() + e, 4)); it != replaced.end()) {
+      const auto& [tag, bytes] = it->second;
+      std::memcpy(b.data() + e, tag.data(), 4);
+      putU(b, e + 4, tag == "TETS" ? 1 : 0, 4);  // flags: of the old three only TETS is required
+      putU(b, e + 16, bytes.size(), 8);
+      b.insert(b.end(), bytes.begin(), bytes.end());
+      shift += int64_t(bytes.size()) - int64_t(size);
     } else {
       b.insert(b.end(), file.begin() + std::ptrdiff_t(offset), file.begin() + std::ptrdiff_t(offset + size));
     }
@@ -91,13 +126,23 @@ const Fixture& fixture(int n) {
     f->level.sh.push_back(quantizeSh(sh));
   }
   f->level.tets = buildTetRecords(pts, tetrahedralizeDelaunay(pts), glm::dvec3(0.0));
+  f->level.cellGrid = buildCellGrid(f->level.probes, f->level.tets);
+  LevelOcclusion& occ = f->level.occlusion;
+  for (size_t t = 0; t < f->level.tets.size(); ++t) {
+    if (t % 3 != 0) {
+      occ.tets.push_back({});
+      continue;
+    }
+    occ.tets.push_back(makeTetOcclusion(kOcclusionPlanes, 1, uint32_t(occ.planes.size()), 0x1Fu));
+    occ.planes.push_back(makeOcclusionPlane(1.0, -0.5, 0.25, -1.0));
+  }
   const std::string path = (std::filesystem::temp_directory_path() /
                             ("tetraprobe_bench_load_" + std::to_string(::getpid()) + ".tpb"))
                                .string();
   std::string error;
   if (!saveLevel(path, f->level) || !readFile(path, f->file, &error)) std::abort();
   std::filesystem::remove(path);
-  f->oldFile = withOldTets(f->file, f->level.tets);
+  f->oldFile = withOldSections(f->file, f->level);
   return *f;
 }
 

@@ -60,9 +60,33 @@ constexpr uint32_t tag(const char (&s)[5]) {
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
                    kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagGenerator = tag("GENR"),
                    kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagCellGridFaces = tag("CGR3"),
-                   kTagOcclusion = tag("OCCL"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
+                   kTagOcclusion = tag("OCCL"), kTagOcclusionPacked = tag("OCC2"),
+                   kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
+// OCC2: the counts and the cell-mask byte count (u64 each), then a code byte per tet (kind | plane count << 2)
+// and the cell masks of the plane tets, 2^count x 4 bits each (1, 2 or 4 bytes); offsets are implicit (each
+// tet's planes and block follow the previous tet's).
+constexpr uint64_t kOcclusionPackedHeaderBytes = 32;
+constexpr uint32_t occlusionCellBytes(uint32_t planeCount) {
+  return 1u << (planeCount - 1);
+}  // 1..3 planes
+
+// True when every record's offset is where the packed form (OCC2) puts it: its planes and shadow-map block
+// right after the previous record's, in tet order (how buildOcclusion lays them out).
+bool occlusionPackable(const LevelOcclusion& occ) {
+  uint64_t planes = 0, blocks = 0;
+  for (const TetOcclusion& rec : occ.tets) {
+    if (rec.kind() == kOcclusionPlanes) {
+      if (rec.offset() != planes) return false;
+      planes += rec.planeCount();
+    } else if (rec.kind() == kOcclusionShadowMaps) {
+      if (rec.offset() != blocks) return false;
+      ++blocks;
+    }
+  }
+  return true;
+}
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
 // retired CGRD section, leaves of several tets, is an unknown optional tag now: skipped, the grid rebuilt.)
 constexpr uint64_t kCellGridHeaderBytes = 64;
@@ -468,14 +492,31 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
 
   if (!level.occlusion.empty()) {  // an empty occlusion writes no section: such files stay byte-identical
     const LevelOcclusion& occ = level.occlusion;
-    sections.push_back({kTagOcclusion, 0, {}});
+    // Packed (OCC2) unless the level is streamed (its loader seeks each tet's fixed-size OCCL record) or the
+    // records' offsets are laid out otherwise (kept as they are).
+    const bool packed = level.stream.empty() && occlusionPackable(occ);
+    // OCC2 is flagged required: a reader that does not know it must refuse the file, not drop the occlusion.
+    sections.push_back({packed ? kTagOcclusionPacked : kTagOcclusion, packed ? kSectionRequired : 0, {}});
     Writer& s = sections.back().bytes;
     s.u64(occ.tets.size());
     s.u64(occ.planes.size());
     s.u64(occ.shadowMaps.size() / kShadowMapBlockBytes);
-    for (const TetOcclusion& rec : occ.tets) {
-      s.u32(rec.header);
-      s.u32(rec.cells);
+    if (packed) {
+      uint64_t cellBytes = 0;
+      for (const TetOcclusion& rec : occ.tets)
+        if (rec.kind() == kOcclusionPlanes) cellBytes += occlusionCellBytes(rec.planeCount());
+      s.u64(cellBytes);
+      for (const TetOcclusion& rec : occ.tets) {
+        const auto code = uint8_t(rec.header & 15u);  // kind and plane count
+        s.bytes(&code, 1);
+      }
+      for (const TetOcclusion& rec : occ.tets)
+        if (rec.kind() == kOcclusionPlanes) s.uN(rec.cells, occlusionCellBytes(rec.planeCount()));
+    } else {
+      for (const TetOcclusion& rec : occ.tets) {
+        s.u32(rec.header);
+        s.u32(rec.cells);
+      }
     }
     for (const OcclusionPlane& p : occ.planes)
       for (int16_t x : p.c) s.i16(x);
@@ -581,8 +622,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridFaces, occlusion, kinds,
-      stream;
+  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridFaces, occlusionFixed,
+      occlusionPacked, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -592,19 +633,20 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     if ((flags & ~kSectionRequired) != 0 || offset != expected || bytes > kMaxSectionBytes)
       return fail(LevelStatus::kCorrupt, name + where + "bad flags, offset or size");
     expected += bytes;
-    Section* known = t == kTagProbes          ? &probes
-                     : t == kTagSh            ? &sh
-                     : t == kTagShHalf        ? &shHalf
-                     : t == kTagTets          ? &tets
-                     : t == kTagTetsCompact   ? &tetsCompact
-                     : t == kTagGenerator     ? &generator
-                     : t == kTagOuterCells    ? &outer
-                     : t == kTagCellGrid      ? &cellGrid
-                     : t == kTagCellGridFaces ? &cellGridFaces
-                     : t == kTagOcclusion     ? &occlusion
-                     : t == kTagProbeKinds    ? &kinds
-                     : t == kTagStream        ? &stream
-                                              : nullptr;
+    Section* known = t == kTagProbes            ? &probes
+                     : t == kTagSh              ? &sh
+                     : t == kTagShHalf          ? &shHalf
+                     : t == kTagTets            ? &tets
+                     : t == kTagTetsCompact     ? &tetsCompact
+                     : t == kTagGenerator       ? &generator
+                     : t == kTagOuterCells      ? &outer
+                     : t == kTagCellGrid        ? &cellGrid
+                     : t == kTagCellGridFaces   ? &cellGridFaces
+                     : t == kTagOcclusion       ? &occlusionFixed
+                     : t == kTagOcclusionPacked ? &occlusionPacked
+                     : t == kTagProbeKinds      ? &kinds
+                     : t == kTagStream          ? &stream
+                                                : nullptr;
     if (!known) {
       if (flags & kSectionRequired)
         return fail(LevelStatus::kUnsupportedVersion,
@@ -677,17 +719,26 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
   }
 
-  uint64_t occTets = 0, occPlanes = 0, occBlocks = 0;
+  // Occlusion: fixed 8-byte records with their offsets (OCCL) or packed (OCC2, what saveLevel writes).
+  if (occlusionFixed.present && occlusionPacked.present)
+    return fail(LevelStatus::kCorrupt, name + "both OCCL and OCC2 occlusion sections");
+  const bool occPacked = occlusionPacked.present;
+  const Section& occlusion = occPacked ? occlusionPacked : occlusionFixed;
+  uint64_t occTets = 0, occPlanes = 0, occBlocks = 0, occCellBytes = 0;
   if (occlusion.present) {
-    if (occlusion.size < kOcclusionHeaderBytes)
+    const uint64_t headerBytes = occPacked ? kOcclusionPackedHeaderBytes : kOcclusionHeaderBytes;
+    if (occlusion.size < headerBytes)
       return fail(LevelStatus::kCorrupt, name + "occlusion section shorter than its header");
     Reader counts(data + occlusion.offset);
     occTets = counts.u64();
     occPlanes = counts.u64();
     occBlocks = counts.u64();
+    if (occPacked) occCellBytes = counts.u64();
+    const uint64_t recordBytes = occPacked ? occTets + occCellBytes : occTets * kTetOcclusionBytes;
     if (occTets != tetCount || occPlanes > kOcclusionMaxOffset || occBlocks > kOcclusionMaxOffset ||
-        occlusion.size != kOcclusionHeaderBytes + occTets * kTetOcclusionBytes +
-                              occPlanes * kOcclusionPlaneBytes + occBlocks * kShadowMapBlockBytes)
+        occCellBytes > 4 * occTets ||
+        occlusion.size !=
+            headerBytes + recordBytes + occPlanes * kOcclusionPlaneBytes + occBlocks * kShadowMapBlockBytes)
       return fail(LevelStatus::kCorrupt, name + "occlusion section size does not match its counts");
   }
 
@@ -810,7 +861,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     }
   }
 
-  if (occlusion.present) {
+  if (occlusion.present && !occPacked) {
     LevelOcclusion& occ = level.occlusion;
     body = Reader(data + occlusion.offset + kOcclusionHeaderBytes);
     occ.tets.resize(size_t(occTets));
@@ -818,6 +869,51 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       rec.header = body.u32();
       rec.cells = body.u32();
     }
+    occ.planes.resize(size_t(occPlanes));
+    for (OcclusionPlane& p : occ.planes)
+      for (int16_t& x : p.c) x = body.i16();
+    occ.shadowMaps.resize(size_t(occBlocks * kShadowMapBlockBytes));
+    if (!occ.shadowMaps.empty())
+      std::memcpy(occ.shadowMaps.data(), body.skip(occ.shadowMaps.size()), occ.shadowMaps.size());
+  }
+
+  if (occlusion.present && occPacked) {
+    // The records from their codes: offsets follow from the order, each checked against the counts before
+    // it is used (validateLevel repeats the record checks on the result).
+    LevelOcclusion& occ = level.occlusion;
+    const uint8_t* codes = data + occlusion.offset + kOcclusionPackedHeaderBytes;
+    Reader cells(codes + occTets);
+    occ.tets.resize(size_t(occTets));
+    uint64_t planes = 0, blocks = 0, cellBytes = 0;
+    for (size_t t = 0; t < occ.tets.size(); ++t) {
+      const uint32_t code = codes[t], kind = code & 3u, count = code >> 2;
+      const auto where = [&] { return name + "occlusion of tet " + std::to_string(t) + ": "; };
+      if (kind == kOcclusionNone && code == 0) {
+        occ.tets[t] = TetOcclusion{};
+      } else if (kind == kOcclusionPlanes && count >= 1 && count <= 3) {
+        const uint32_t n = occlusionCellBytes(count);
+        if (planes + count > occPlanes || cellBytes + n > occCellBytes)
+          return fail(LevelStatus::kCorrupt,
+                      where() + "its planes or cell masks run past the section's counts");
+        occ.tets[t] = makeTetOcclusion(kOcclusionPlanes, count, uint32_t(planes), cells.uN(n));
+        planes += count;
+        cellBytes += n;
+      } else if (kind == kOcclusionShadowMaps && count == 0) {
+        if (blocks >= occBlocks)
+          return fail(LevelStatus::kCorrupt, where() + "its shadow-map block runs past the section's counts");
+        occ.tets[t] = makeTetOcclusion(kOcclusionShadowMaps, 0, uint32_t(blocks), 0);
+        ++blocks;
+      } else {
+        return fail(LevelStatus::kCorrupt, where() + "unknown code " + std::to_string(code));
+      }
+    }
+    if (planes != occPlanes || blocks != occBlocks || cellBytes != occCellBytes)
+      return fail(LevelStatus::kCorrupt,
+                  name + "occlusion: " + std::to_string(occPlanes) + " planes, " + std::to_string(occBlocks) +
+                      " shadow-map blocks and " + std::to_string(occCellBytes) +
+                      " cell-mask bytes, the records use " + std::to_string(planes) + ", " +
+                      std::to_string(blocks) + " and " + std::to_string(cellBytes));
+    body = Reader(codes + occTets + occCellBytes);
     occ.planes.resize(size_t(occPlanes));
     for (OcclusionPlane& p : occ.planes)
       for (int16_t& x : p.c) x = body.i16();

@@ -205,6 +205,9 @@ LevelResult StreamingLevel::open(const std::string& path) {
       f->tetRecord = t == tag("TETC") ? 4 * levelProbeIndexBytes(f->probeCount) : 32;
     }
     if (t == tag("OCCL")) f->occl = offset, occlSize = bytes;
+    if (t == tag("OCC2"))  // saveLevel writes OCCL for a level with a streaming index: load seeks its records
+      return fail(LevelStatus::kCorrupt,
+                  name + "packed occlusion (OCC2) cannot be streamed: re-run tetraprobe stream");
     if (t == tag("STRM")) strm = offset, strmSize = bytes;
   }
   if (expected + 4 != size)

@@ -436,6 +436,21 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
   }
   EXPECT_GE(refused, 1u);
   EXPECT_GE(loaded, 1u);
+
+  // The bake wrote packed occlusion (OCC2); `stream` rewrote it as fixed records (OCCL), which `load` seeks.
+  // A streamed file holding OCC2 is refused at `open`, naming it.
+  const std::string baked = slurp(path("full.tpb"));
+  EXPECT_NE(tetraprobe::test::section(tetraprobe::test::Bytes(baked.begin(), baked.end()), "OCC2"), 0u);
+  tetraprobe::test::Bytes p(streamed.begin(), streamed.end());
+  for (uint32_t i = 0; i < tetraprobe::test::getU32(p, 72); ++i)
+    if (std::memcmp(&p[80 + 24 * i], "OCCL", 4) == 0) std::memcpy(&p[80 + 24 * i], "OCC2", 4);
+  tetraprobe::test::fixChecksums(p);
+  std::ofstream(path("packed.tpb"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(p.data()), std::streamsize(p.size()));
+  tetraprobe::StreamingLevel packed;
+  const tetraprobe::LevelResult r = packed.open(path("packed.tpb").string());
+  EXPECT_EQ(r.status, tetraprobe::LevelStatus::kCorrupt);
+  EXPECT_NE(r.message.find("OCC2"), std::string::npos) << r.message;
 }
 
 // The same input and options give a bit-identical level whatever the thread count, and the report has the

@@ -774,6 +774,28 @@ LevelOcclusion syntheticOcclusion(const Level& level) {
   return occ;
 }
 
+// The same occlusion with tets 1 and 6 (one plane each) swapping where their planes are stored: valid, but
+// not in the order the packed section (OCC2) implies, so saveLevel keeps the records as they are (OCCL).
+LevelOcclusion unorderedOcclusion(const Level& level) {
+  LevelOcclusion occ = syntheticOcclusion(level);
+  TetOcclusion &a = occ.tets[1], &b = occ.tets[6];
+  EXPECT_EQ(a.planeCount(), 1u);
+  EXPECT_EQ(b.planeCount(), 1u);
+  std::swap(occ.planes[a.offset()], occ.planes[b.offset()]);
+  const uint32_t offsetA = a.offset();
+  a = makeTetOcclusion(kOcclusionPlanes, 1, b.offset(), a.cells);
+  b = makeTetOcclusion(kOcclusionPlanes, 1, offsetA, b.cells);
+  return occ;
+}
+
+// Cell-mask bytes of the packed section: 2^count x 4 bits per plane tet.
+uint64_t packedCellBytes(const LevelOcclusion& occ) {
+  uint64_t n = 0;
+  for (const TetOcclusion& rec : occ.tets)
+    if (rec.kind() == kOcclusionPlanes) n += uint64_t(1) << (rec.planeCount() - 1);
+  return n;
+}
+
 TEST(LevelFile, OcclusionRoundTripsAndEmptyWritesNoSection) {
   TempDir dir;
   Level level = smallLevel();
@@ -794,9 +816,27 @@ TEST(LevelFile, OcclusionRoundTripsAndEmptyWritesNoSection) {
   ASSERT_TRUE(saveLevel(dir.file("again.tpb"), back));
   const std::vector<char> occBytes = bytesOf(dir.file("occ.tpb"));
   EXPECT_EQ(occBytes, bytesOf(dir.file("again.tpb")));
-  // One more section: 24-byte table entry, 24-byte counts, 8 per tet, 16 per plane, 64 per shadow-map block.
-  EXPECT_EQ(occBytes.size(), bytesOf(dir.file("none.tpb")).size() + 24 + 24 + 8 * a.tets.size() +
-                                 8 * a.planes.size() + a.shadowMaps.size());
+  // One more section (OCC2): 24-byte table entry, 32-byte counts, a code byte per tet, the plane tets' cell
+  // masks (1, 2 or 4 bytes), 8 per plane, 64 per shadow-map block.
+  EXPECT_NE(sectionOffset(occBytes, "OCC2"), 0u);
+  EXPECT_EQ(occBytes.size(), bytesOf(dir.file("none.tpb")).size() + 24 + 32 + a.tets.size() +
+                                 packedCellBytes(a) + 8 * a.planes.size() + a.shadowMaps.size());
+  // Records whose offsets are not in tet order keep them: the fixed 8-byte records (OCCL), read back as they
+  // were.
+  level.occlusion = unorderedOcclusion(level);
+  ASSERT_TRUE(saveLevel(dir.file("fixed.tpb"), level));
+  const std::vector<char> fixedBytes = bytesOf(dir.file("fixed.tpb"));
+  EXPECT_NE(sectionOffset(fixedBytes, "OCCL"), 0u);
+  EXPECT_EQ(fixedBytes.size(), bytesOf(dir.file("none.tpb")).size() + 24 + 24 + 8 * a.tets.size() +
+                                   8 * a.planes.size() + a.shadowMaps.size());
+  Level fixedBack;
+  ASSERT_TRUE(loadLevel(dir.file("fixed.tpb"), fixedBack));
+  EXPECT_EQ(std::memcmp(fixedBack.occlusion.tets.data(), level.occlusion.tets.data(),
+                        a.tets.size() * sizeof(TetOcclusion)),
+            0);
+  EXPECT_EQ(std::memcmp(fixedBack.occlusion.planes.data(), level.occlusion.planes.data(),
+                        a.planes.size() * sizeof(OcclusionPlane)),
+            0);
   // Dropping it again gives the bytes of a level that never had any.
   back.occlusion = {};
   ASSERT_TRUE(saveLevel(dir.file("dropped.tpb"), back));
@@ -822,6 +862,8 @@ TEST(LevelFile, RejectsInconsistentOcclusion) {
     bad.occlusion.planes[0] = OcclusionPlane{};  // the zero plane: no plane at all
     EXPECT_FALSE(validateLevel(bad));
   }
+  // The fixed records (OCCL): a level whose offsets are not in tet order is written with them.
+  level.occlusion = unorderedOcclusion(level);
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
   const size_t occ = sectionOffset(full, "OCCL"), recs = occ + 24;
@@ -862,6 +904,52 @@ TEST(LevelFile, RejectsInconsistentOcclusion) {
     Level out;
     EXPECT_FALSE(loadLevel(dir.file("short.tpb"), out));
   }
+
+  // The packed section (OCC2): counts, then a code byte per tet (kind | plane count << 2), then cell masks.
+  level.occlusion = syntheticOcclusion(level);
+  ASSERT_TRUE(saveLevel(dir.file("packed.tpb"), level));
+  const std::vector<char> packed = bytesOf(dir.file("packed.tpb"));
+  const size_t occ2 = sectionOffset(packed, "OCC2"), codes = occ2 + 32;
+  const uint64_t cellBytes = packedCellBytes(level.occlusion);
+  const char* const counts = "does not match its counts";
+  const char* const overrun = "past the section's counts";
+  const struct {
+    size_t offset;
+    uint8_t value;
+    const char* needle;
+  } packedCases[] = {
+      {occ2 + 0, uint8_t(level.tets.size() - 1), counts},  // tet count (below 256: the low byte)
+      {occ2 + 16, 0, counts},                              // shadow-map block count
+      {occ2 + 24, uint8_t(cellBytes + 1), counts},         // cell-mask bytes (below 255)
+      {codes + 0, 3, "unknown code"},                      // tet 0: kind 3
+      {codes + 0, 0x10, "unknown code"},                   // tet 0: bits above the plane count
+      {codes + 1, 1, "unknown code"},                      // tet 1: planes, count 0
+      {codes + 4, 2 | 1 << 2, "unknown code"},             // tet 4: shadow maps with a plane count
+      {codes + 4, 0, "the records use"},                   // tet 4: its block left unused
+      {codes + 0, 1 | 3 << 2, "the records use"},          // tet 0: three more planes than counted
+  };
+  ASSERT_LT(level.tets.size(), 256u);
+  ASSERT_LT(cellBytes, 255u);
+  for (const auto& c : packedCases) {
+    std::vector<char> b = packed;
+    b[c.offset] = char(c.value);
+    fixPayloadCrc(b);
+    writeBytes(dir.file("forged.tpb"), b, b.size());
+    Level out;
+    const LevelResult r = loadLevel(dir.file("forged.tpb"), out);
+    EXPECT_EQ(r.status, LevelStatus::kCorrupt) << r.message;
+    const bool named = r.message.find(c.needle) != std::string::npos ||
+                       (c.needle != counts && r.message.find(overrun) != std::string::npos);
+    EXPECT_TRUE(named) << c.needle << ": " << r.message;
+    EXPECT_TRUE(emptyLevel(out));
+    EXPECT_TRUE(out.occlusion.empty());
+  }
+  const std::vector<char> both = withExtraSection(full, "OCC2", 0, std::string(32, '\0'));
+  writeBytes(dir.file("both.tpb"), both, both.size());
+  Level out;
+  const LevelResult rb = loadLevel(dir.file("both.tpb"), out);
+  EXPECT_EQ(rb.status, LevelStatus::kCorrupt);
+  EXPECT_NE(rb.message.find("both OCCL and OCC2"), std::string::npos) << rb.message;
 }
 
 }  // namespace
