@@ -248,21 +248,22 @@ LevelResult validateLevel(const Level& level) {
   }
   for (int64_t t = 0; t < tetCount; ++t) {
     const Tet& tet = level.tets[size_t(t)];
-    const std::string where = "tet " + std::to_string(t) + ": ";
+    const auto where = [t] { return "tet " + std::to_string(t) + ": "; };  // built only for a message
     for (int i = 0; i < 4; ++i) {
       if (tet.v[i] < 0 || tet.v[i] >= probeCount)
-        return corrupt(where + "vertex " + std::to_string(tet.v[i]) + " out of range (" +
+        return corrupt(where() + "vertex " + std::to_string(tet.v[i]) + " out of range (" +
                        std::to_string(probeCount) + " probes)");
       for (int j = 0; j < i; ++j)
-        if (tet.v[i] == tet.v[j]) return corrupt(where + "vertex " + std::to_string(tet.v[i]) + " repeated");
+        if (tet.v[i] == tet.v[j])
+          return corrupt(where() + "vertex " + std::to_string(tet.v[i]) + " repeated");
       const int32_t n = tet.n[i];
       if (n < -1 || n >= tetCount || n == t)
-        return corrupt(where + "neighbour " + std::to_string(n) + " out of range (" +
+        return corrupt(where() + "neighbour " + std::to_string(n) + " out of range (" +
                        std::to_string(tetCount) + " tets)");
       if (n >= 0) {  // adjacency is mutual: the neighbour names this tet back
         const Tet& other = level.tets[size_t(n)];
         if (other.n[0] != t && other.n[1] != t && other.n[2] != t && other.n[3] != t)
-          return corrupt(where + "neighbour " + std::to_string(n) + " does not name it back");
+          return corrupt(where() + "neighbour " + std::to_string(n) + " does not name it back");
       }
     }
   }
@@ -309,42 +310,42 @@ LevelResult validateLevel(const Level& level) {
                      " hull faces");
     for (int64_t k = 0; k < cellCount; ++k) {
       const OuterCell& c = level.outerCells[size_t(k)];
-      const std::string where = "outer cell " + std::to_string(k) + ": ";
+      const auto where = [k] { return "outer cell " + std::to_string(k) + ": "; };
       if (c.tet < 0 || c.tet >= tetCount || c.face < 0 || c.face > 3)
-        return corrupt(where + "tet " + std::to_string(c.tet) + " face " + std::to_string(c.face) +
+        return corrupt(where() + "tet " + std::to_string(c.tet) + " face " + std::to_string(c.face) +
                        " out of range");
       if (k > 0) {  // strictly increasing (tet, face): the order lookups binary-search
         const OuterCell& p = level.outerCells[size_t(k - 1)];
         if (p.tet > c.tet || (p.tet == c.tet && p.face >= c.face))
-          return corrupt(where + "out of (tet, face) order");
+          return corrupt(where() + "out of (tet, face) order");
       }
       const Tet& tet = level.tets[size_t(c.tet)];
-      if (tet.n[c.face] != -1) return corrupt(where + "names a face that is not on the hull");
+      if (tet.n[c.face] != -1) return corrupt(where() + "names a face that is not on the hull");
       for (int i = 0; i < 3; ++i) {
         bool onFace = false;
         for (int j = 0; j < 4; ++j) onFace = onFace || (j != c.face && tet.v[j] == c.v[i]);
         for (int j = 0; j < i; ++j) onFace = onFace && c.v[j] != c.v[i];
         if (!onFace)
-          return corrupt(where + "probe " + std::to_string(c.v[i]) + " is not a vertex of its hull face");
+          return corrupt(where() + "probe " + std::to_string(c.v[i]) + " is not a vertex of its hull face");
         const int32_t n = c.n[i];
         if (n < -1 || n >= cellCount || n == k)
-          return corrupt(where + "link " + std::to_string(n) + " out of range");
+          return corrupt(where() + "link " + std::to_string(n) + " out of range");
         if (n >= 0) {
           const OuterCell& o = level.outerCells[size_t(n)];
           if (o.n[0] != k && o.n[1] != k && o.n[2] != k)
-            return corrupt(where + "link " + std::to_string(n) + " does not name it back");
+            return corrupt(where() + "link " + std::to_string(n) + " does not name it back");
           // The linked cell shares the edge opposite v[i] (the outer walk trusts the links as the tet walk
           // trusts its neighbours).
           const int32_t a = c.v[(i + 1) % 3], b = c.v[(i + 2) % 3];
           const auto has = [&](int32_t v) { return o.v[0] == v || o.v[1] == v || o.v[2] == v; };
           if (!has(a) || !has(b))
-            return corrupt(where + "link " + std::to_string(n) + " does not share the edge opposite probe " +
-                           std::to_string(c.v[i]));
+            return corrupt(where() + "link " + std::to_string(n) +
+                           " does not share the edge opposite probe " + std::to_string(c.v[i]));
         }
         const glm::vec3 nrm(c.normal[i][0], c.normal[i][1], c.normal[i][2]);
         const float len2 = nrm.x * nrm.x + nrm.y * nrm.y + nrm.z * nrm.z;
         if (!finite3(nrm) || !(std::abs(len2 - 1.0f) < 1e-3f) || c.normal[i][3] != 0.0f)
-          return corrupt(where + "normal " + std::to_string(i) + " is not a unit vector");
+          return corrupt(where() + "normal " + std::to_string(i) + " is not a unit vector");
       }
     }
   }
@@ -396,23 +397,23 @@ LevelResult validateLevel(const Level& level) {
     uint64_t planesUsed = 0, blocksUsed = 0;
     for (size_t t = 0; t < occ.tets.size(); ++t) {
       const TetOcclusion& rec = occ.tets[t];
-      const std::string where = "occlusion of tet " + std::to_string(t) + ": ";
+      const auto where = [t] { return "occlusion of tet " + std::to_string(t) + ": "; };
       const uint32_t kind = rec.header & 3u;
       if (kind == kOcclusionNone) {
-        if (rec.header != 0 || rec.cells != 0) return corrupt(where + "kind none with non-zero fields");
+        if (rec.header != 0 || rec.cells != 0) return corrupt(where() + "kind none with non-zero fields");
       } else if (kind == kOcclusionPlanes) {
         const uint32_t count = rec.planeCount();
         const uint32_t usedBits = 4u << count;  // 2^count cells x 4 bits
         if (count == 0 || uint64_t(rec.offset()) + count > occ.planes.size() ||
             (usedBits < 32 && (rec.cells >> usedBits) != 0))
-          return corrupt(where + "plane count, offset or cell masks out of range");
+          return corrupt(where() + "plane count, offset or cell masks out of range");
         planesUsed += count;
       } else if (kind == kOcclusionShadowMaps) {
         if (rec.planeCount() != 0 || rec.cells != 0 || rec.offset() >= blocks)
-          return corrupt(where + "shadow-map block out of range");
+          return corrupt(where() + "shadow-map block out of range");
         ++blocksUsed;
       } else {
-        return corrupt(where + "unknown kind " + std::to_string(kind));
+        return corrupt(where() + "unknown kind " + std::to_string(kind));
       }
     }
     if (planesUsed != occ.planes.size() || blocksUsed != blocks)
