@@ -68,9 +68,10 @@ constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 
 // and the cell masks of the plane tets, 2^count x 4 bits each (1, 2 or 4 bytes); offsets are implicit (each
 // tet's planes and block follow the previous tet's).
 constexpr uint64_t kOcclusionPackedHeaderBytes = 32;
+// The cell-mask bytes of a plane tet with 1..3 planes: 2^count cells x 4 bits.
 constexpr uint32_t occlusionCellBytes(uint32_t planeCount) {
   return 1u << (planeCount - 1);
-}  // 1..3 planes
+}
 
 // True when every record's offset is where the packed form (OCC2) puts it: its planes and shadow-map block
 // right after the previous record's, in tet order (how buildOcclusion lays them out).
@@ -862,59 +863,52 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     }
   }
 
-  if (occlusion.present && !occPacked) {
+  if (occlusion.present) {
     LevelOcclusion& occ = level.occlusion;
-    body = Reader(data + occlusion.offset + kOcclusionHeaderBytes);
     occ.tets.resize(size_t(occTets));
-    for (TetOcclusion& rec : occ.tets) {
-      rec.header = body.u32();
-      rec.cells = body.u32();
-    }
-    occ.planes.resize(size_t(occPlanes));
-    for (OcclusionPlane& p : occ.planes)
-      for (int16_t& x : p.c) x = body.i16();
-    occ.shadowMaps.resize(size_t(occBlocks * kShadowMapBlockBytes));
-    if (!occ.shadowMaps.empty())
-      std::memcpy(occ.shadowMaps.data(), body.skip(occ.shadowMaps.size()), occ.shadowMaps.size());
-  }
-
-  if (occlusion.present && occPacked) {
-    // The records from their codes: offsets follow from the order, each checked against the counts before
-    // it is used (validateLevel repeats the record checks on the result).
-    LevelOcclusion& occ = level.occlusion;
-    const uint8_t* codes = data + occlusion.offset + kOcclusionPackedHeaderBytes;
-    Reader cells(codes + occTets);
-    occ.tets.resize(size_t(occTets));
-    uint64_t planes = 0, blocks = 0, cellBytes = 0;
-    for (size_t t = 0; t < occ.tets.size(); ++t) {
-      const uint32_t code = codes[t], kind = code & 3u, count = code >> 2;
-      const auto where = [&] { return name + "occlusion of tet " + std::to_string(t) + ": "; };
-      if (kind == kOcclusionNone && code == 0) {
-        occ.tets[t] = TetOcclusion{};
-      } else if (kind == kOcclusionPlanes && count >= 1 && count <= 3) {
-        const uint32_t n = occlusionCellBytes(count);
-        if (planes + count > occPlanes || cellBytes + n > occCellBytes)
-          return fail(LevelStatus::kCorrupt,
-                      where() + "its planes or cell masks run past the section's counts");
-        occ.tets[t] = makeTetOcclusion(kOcclusionPlanes, count, uint32_t(planes), cells.uN(n));
-        planes += count;
-        cellBytes += n;
-      } else if (kind == kOcclusionShadowMaps && count == 0) {
-        if (blocks >= occBlocks)
-          return fail(LevelStatus::kCorrupt, where() + "its shadow-map block runs past the section's counts");
-        occ.tets[t] = makeTetOcclusion(kOcclusionShadowMaps, 0, uint32_t(blocks), 0);
-        ++blocks;
-      } else {
-        return fail(LevelStatus::kCorrupt, where() + "unknown code " + std::to_string(code));
+    if (!occPacked) {  // OCCL: the records as stored
+      body = Reader(data + occlusion.offset + kOcclusionHeaderBytes);
+      for (TetOcclusion& rec : occ.tets) {
+        rec.header = body.u32();
+        rec.cells = body.u32();
       }
+    } else {
+      // OCC2: the records from their codes. Offsets follow from the order, each checked against the counts
+      // before it is used (validateLevel repeats the record checks on the result).
+      const uint8_t* codes = data + occlusion.offset + kOcclusionPackedHeaderBytes;
+      Reader cells(codes + occTets);
+      uint64_t planes = 0, blocks = 0, cellBytes = 0;
+      for (size_t t = 0; t < occ.tets.size(); ++t) {
+        const uint32_t code = codes[t], kind = code & 3u, count = code >> 2;
+        const auto where = [&] { return name + "occlusion of tet " + std::to_string(t) + ": "; };
+        if (kind == kOcclusionNone && code == 0) {
+          occ.tets[t] = TetOcclusion{};
+        } else if (kind == kOcclusionPlanes && count >= 1 && count <= 3) {
+          const uint32_t n = occlusionCellBytes(count);
+          if (planes + count > occPlanes || cellBytes + n > occCellBytes)
+            return fail(LevelStatus::kCorrupt,
+                        where() + "its planes or cell masks run past the section's counts");
+          occ.tets[t] = makeTetOcclusion(kOcclusionPlanes, count, uint32_t(planes), cells.uN(n));
+          planes += count;
+          cellBytes += n;
+        } else if (kind == kOcclusionShadowMaps && count == 0) {
+          if (blocks >= occBlocks)
+            return fail(LevelStatus::kCorrupt,
+                        where() + "its shadow-map block runs past the section's counts");
+          occ.tets[t] = makeTetOcclusion(kOcclusionShadowMaps, 0, uint32_t(blocks), 0);
+          ++blocks;
+        } else {
+          return fail(LevelStatus::kCorrupt, where() + "unknown code " + std::to_string(code));
+        }
+      }
+      if (planes != occPlanes || blocks != occBlocks || cellBytes != occCellBytes)
+        return fail(LevelStatus::kCorrupt,
+                    name + "occlusion: " + std::to_string(occPlanes) + " planes, " +
+                        std::to_string(occBlocks) + " shadow-map blocks and " + std::to_string(occCellBytes) +
+                        " cell-mask bytes, the records use " + std::to_string(planes) + ", " +
+                        std::to_string(blocks) + " and " + std::to_string(cellBytes));
+      body = Reader(codes + occTets + occCellBytes);
     }
-    if (planes != occPlanes || blocks != occBlocks || cellBytes != occCellBytes)
-      return fail(LevelStatus::kCorrupt,
-                  name + "occlusion: " + std::to_string(occPlanes) + " planes, " + std::to_string(occBlocks) +
-                      " shadow-map blocks and " + std::to_string(occCellBytes) +
-                      " cell-mask bytes, the records use " + std::to_string(planes) + ", " +
-                      std::to_string(blocks) + " and " + std::to_string(cellBytes));
-    body = Reader(codes + occTets + occCellBytes);
     occ.planes.resize(size_t(occPlanes));
     for (OcclusionPlane& p : occ.planes)
       for (int16_t& x : p.c) x = body.i16();

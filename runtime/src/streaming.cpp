@@ -47,6 +47,11 @@ uint32_t u32At(const uint8_t* p) {
 uint64_t u64At(const uint8_t* p) {
   return uint64_t(u32At(p)) | uint64_t(u32At(p + 4)) << 32;
 }
+uint32_t uintAt(const uint8_t* p, uint64_t bytes) {  // little-endian, 1..4 bytes
+  uint32_t v = 0;
+  for (uint64_t b = 0; b < bytes; ++b) v |= uint32_t(p[b]) << (8 * b);
+  return v;
+}
 int32_t i32At(const uint8_t* p) {
   return int32_t(u32At(p));
 }
@@ -104,8 +109,8 @@ size_t indexOf(const std::vector<uint32_t>& sorted, uint32_t v) {
 struct StreamingLevel::File {
   std::ifstream in;
   uint64_t probes = 0, sh = 0, tets = 0;  // section offsets
-  uint64_t tetRecord =
-      32;  // tet bytes: 4 x levelProbeIndexBytes (TETC, probes) or 32 (TETS, with neighbours)
+  // Tet bytes: 4 x levelProbeIndexBytes (TETC, probes) or 32 (TETS, with neighbours).
+  uint64_t tetRecord = 32;
   uint64_t shRecord = 108;  // SH bytes a probe: 108 (SHRG, float) or 56 (SHRH, ShHalf)
   uint64_t occl = 0;        // 0: no occlusion section
   uint64_t strm = 0;        // the streaming index section
@@ -380,11 +385,8 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
     if (!f.read(f.tets + f.tetRecord * t, buf, size_t(4 * indexBytes)))
       return fail(LevelStatus::kCannotOpen, where + "read failed");
     Tet rec;  // neighbours: linked among the loaded tets when the fine level is assembled
-    for (int k = 0; k < 4; ++k) {
-      uint32_t v = 0;
-      for (uint64_t b = 0; b < indexBytes; ++b) v |= uint32_t(buf[indexBytes * uint64_t(k) + b]) << (8 * b);
-      rec.v[k] = int32_t(v), rec.n[k] = -1;
-    }
+    for (int k = 0; k < 4; ++k)
+      rec.v[k] = int32_t(uintAt(buf + indexBytes * uint64_t(k), indexBytes)), rec.n[k] = -1;
     for (int k = 0; k < 4; ++k) {
       const int32_t v = rec.v[k];
       if (v < 0 || !std::binary_search(s->probeIds.begin(), s->probeIds.end(), uint32_t(v)))

@@ -111,6 +111,16 @@ size_t sectionOffset(const std::vector<char>& b, const char* tag) {
   return 0;
 }
 
+// `bytes`, written and loaded, is refused as kCorrupt with a message holding `needle`, and nothing is loaded.
+void expectRefusedAsCorrupt(TempDir& dir, const std::vector<char>& bytes, const char* needle) {
+  writeBytes(dir.file("refused.tpb"), bytes, bytes.size());
+  Level out;
+  const LevelResult r = loadLevel(dir.file("refused.tpb"), out);
+  EXPECT_EQ(r.status, LevelStatus::kCorrupt) << r.message;
+  EXPECT_NE(r.message.find(needle), std::string::npos) << r.message;
+  EXPECT_TRUE(emptyLevel(out));
+}
+
 // The file with one more section appended (table entry, data), every checksum made consistent again.
 std::vector<char> withExtraSection(const std::vector<char>& full, const char* tag, uint32_t flags,
                                    const std::string& data) {
@@ -707,12 +717,7 @@ TEST(LevelFile, GridNotCutFromTetFacesIsWrittenWithItsPlanes) {
                         level.cellGrid.nodes.size() * sizeof(BspNode)),
             0);
 
-  const std::vector<char> both = withExtraSection(full, "CGR3", 0, std::string(64, '\0'));
-  writeBytes(dir.file("both.tpb"), both, both.size());
-  Level out;
-  const LevelResult rb = loadLevel(dir.file("both.tpb"), out);
-  EXPECT_EQ(rb.status, LevelStatus::kCorrupt);
-  EXPECT_NE(rb.message.find("both CGR2 and CGR3"), std::string::npos) << rb.message;
+  expectRefusedAsCorrupt(dir, withExtraSection(full, "CGR3", 0, std::string(64, '\0')), "both CGR2 and CGR3");
 }
 
 // A section flagged as required that this reader does not know must not be ignored.
@@ -944,12 +949,7 @@ TEST(LevelFile, RejectsInconsistentOcclusion) {
     EXPECT_TRUE(emptyLevel(out));
     EXPECT_TRUE(out.occlusion.empty());
   }
-  const std::vector<char> both = withExtraSection(full, "OCC2", 0, std::string(32, '\0'));
-  writeBytes(dir.file("both.tpb"), both, both.size());
-  Level out;
-  const LevelResult rb = loadLevel(dir.file("both.tpb"), out);
-  EXPECT_EQ(rb.status, LevelStatus::kCorrupt);
-  EXPECT_NE(rb.message.find("both OCCL and OCC2"), std::string::npos) << rb.message;
+  expectRefusedAsCorrupt(dir, withExtraSection(full, "OCC2", 0, std::string(32, '\0')), "both OCCL and OCC2");
 }
 
 }  // namespace
