@@ -19,6 +19,7 @@
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/tet_adjacency.h"
 
+#include "bsp_codec.h"
 #include "crc32.h"
 
 namespace tetraprobe {
@@ -59,7 +60,7 @@ constexpr uint32_t tag(const char (&s)[5]) {
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
                    kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagGenerator = tag("GENR"),
-                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagCellGridFaces = tag("CGR3"),
+                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagCellGridPacked = tag("CGR4"),
                    kTagOcclusion = tag("OCCL"), kTagOcclusionPacked = tag("OCC2"),
                    kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
@@ -91,13 +92,15 @@ bool occlusionPackable(const LevelOcclusion& occ) {
 // CGR2: min, cellSize, maxProbe, maxDepth, meanDepth, leaves, unproven leaves, slot and node counts. (The
 // retired CGRD section, leaves of several tets, is an unknown optional tag now: skipped, the grid rebuilt.)
 constexpr uint64_t kCellGridHeaderBytes = 64;
-// CGR3: the same header and slots; a node is the tet face its plane was cut from (u32 tet << 2 | face) and its
-// two children: 12 bytes instead of 24 (the loader recomputes the plane, cellGridFacePlane).
-constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24, kFaceNodeBytes = 12;
+// CGR4: the same header and slots, then the nodes as a varint stream naming the tet face each plane was cut
+// from and what its children are (bsp_codec.h; about 3 bytes a node). The retired CGR3 (12-byte nodes) is an
+// unknown optional tag now: skipped, the grid rebuilt.
+constexpr uint64_t kSlotBytes = 16, kNodeBytes = 24;
 constexpr uint64_t kMaxFaceNodeTets = uint64_t(1) << 30;  // tet << 2 | face fits a u32
 
 // For every node of `g`, the face (tet << 2 | face) whose cellGridFacePlane is the node's plane bit for bit;
-// false when some node has none (a grid not built by buildCellGrid: written as CGR2). Coplanar faces give the
+// false when some node has none (a grid not built by buildCellGrid: written as CGR2, as is one whose nodes
+// are not in preorder). Coplanar faces give the
 // same floats; the smallest reference is taken, so the output is a pure function of the level.
 bool nodeFaces(const Level& level, std::vector<uint32_t>& out) {
   const CellGrid& g = level.cellGrid;
@@ -465,9 +468,18 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
 
   if (!level.cellGrid.slots.empty()) {
     const CellGrid& g = level.cellGrid;
+    // Packed (CGR4) when every plane is a tet face's and the trees are in preorder; the leaf codes refer to
+    // the neighbours the loader derives, so they are derived here too (none if the tets do not link).
+    std::string packedNodes;
     std::vector<uint32_t> faces;
-    const bool byFace = nodeFaces(level, faces);
-    sections.push_back({byFace ? kTagCellGridFaces : kTagCellGrid, 0, {}});
+    if (nodeFaces(level, faces)) {
+      std::vector<Tet> linked = level.tets;
+      if (!linkTetNeighbours(linked, level.probes.size()).empty())
+        for (Tet& t : linked) std::fill(t.n, t.n + 4, -1);
+      runtime_detail::encodeBspNodes(g.nodes, faces, linked, packedNodes);
+    }
+    const bool packed = !packedNodes.empty() || g.nodes.empty();
+    sections.push_back({packed ? kTagCellGridPacked : kTagCellGrid, 0, {}});
     Writer& s = sections.back().bytes;
     for (int a = 0; a < 3; ++a) s.f32(g.min[a]);
     s.f32(g.cellSize);
@@ -482,13 +494,13 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
       for (int32_t k : slot.key) s.i32(k);
       s.i32(slot.root);
     }
-    for (size_t n = 0; n < g.nodes.size(); ++n) {
-      const BspNode& node = g.nodes[n];
-      if (byFace)
-        s.u32(faces[n]);
-      else
+    if (packed) {
+      s.bytes(packedNodes.data(), packedNodes.size());
+    } else {
+      for (const BspNode& node : g.nodes) {
         for (float x : node.plane) s.f32(x);
-      for (int32_t c : node.child) s.i32(c);
+        for (int32_t c : node.child) s.i32(c);
+      }
     }
   }
 
@@ -624,7 +636,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridFaces, occlusionFixed,
+  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridPacked, occlusionFixed,
       occlusionPacked, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
@@ -643,7 +655,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                      : t == kTagGenerator       ? &generator
                      : t == kTagOuterCells      ? &outer
                      : t == kTagCellGrid        ? &cellGrid
-                     : t == kTagCellGridFaces   ? &cellGridFaces
+                     : t == kTagCellGridPacked  ? &cellGridPacked
                      : t == kTagOcclusion       ? &occlusionFixed
                      : t == kTagOcclusionPacked ? &occlusionPacked
                      : t == kTagProbeKinds      ? &kinds
@@ -701,14 +713,13 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     return fail(LevelStatus::kCorrupt, name + "probe kind section of " + std::to_string(kinds.size) +
                                            " bytes for " + std::to_string(probeCount) + " probes");
 
-  // The cell grid: nodes with their planes (CGR2) or with the tet faces the planes were cut from (CGR3).
-  if (cellGrid.present && cellGridFaces.present)
-    return fail(LevelStatus::kCorrupt, name + "both CGR2 and CGR3 cell grid sections");
-  const bool gridByFace = cellGridFaces.present;
-  if (gridByFace && !tetsCompact.present)  // written together; CGR3 names tets the TETC parse range-checks
-    return fail(LevelStatus::kCorrupt, name + "a CGR3 cell grid with TETS tets");
-  const Section& grid = gridByFace ? cellGridFaces : cellGrid;
-  const uint64_t nodeBytes = gridByFace ? kFaceNodeBytes : kNodeBytes;
+  // The cell grid: nodes with their planes (CGR2) or packed (CGR4: a varint stream, checked as it is decoded).
+  if (cellGrid.present && cellGridPacked.present)
+    return fail(LevelStatus::kCorrupt, name + "both CGR2 and CGR4 cell grid sections");
+  const bool gridPacked = cellGridPacked.present;
+  if (gridPacked && !tetsCompact.present)  // written together; CGR4 names tets the TETC parse range-checks
+    return fail(LevelStatus::kCorrupt, name + "a CGR4 cell grid with TETS tets");
+  const Section& grid = gridPacked ? cellGridPacked : cellGrid;
   uint64_t gridSlots = 0, gridNodes = 0;
   if (grid.present) {
     if (grid.size < kCellGridHeaderBytes)
@@ -716,8 +727,9 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     Reader counts(data + grid.offset + 48);
     gridSlots = counts.u64();
     gridNodes = counts.u64();
+    const uint64_t fixed = kCellGridHeaderBytes + gridSlots * kSlotBytes;
     if (gridSlots > kMaxCount || gridNodes > kMaxCount ||
-        grid.size != kCellGridHeaderBytes + gridSlots * kSlotBytes + gridNodes * nodeBytes)
+        (gridPacked ? grid.size < fixed + gridNodes : grid.size != fixed + gridNodes * kNodeBytes))
       return fail(LevelStatus::kCorrupt, name + "cell grid section size does not match its counts");
   }
 
@@ -838,28 +850,20 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       for (int32_t& k : slot.key) k = body.i32();
       slot.root = body.i32();
     }
-    g.nodes.resize(size_t(gridNodes));
-    for (size_t n = 0; n < g.nodes.size(); ++n) {
-      BspNode& node = g.nodes[n];
-      if (gridByFace) {
-        // The plane is recomputed from the face, as buildCellGrid computed it (cellGridFacePlane).
-        const uint32_t ref = body.u32();
-        const uint32_t t = ref >> 2;
-        const int f = int(ref & 3);
-        if (t >= level.tets.size())
-          return fail(LevelStatus::kCorrupt, name + "cell grid node " + std::to_string(n) + " names tet " +
-                                                 std::to_string(t) + " of " +
-                                                 std::to_string(level.tets.size()));
-        glm::vec3 corners[4];
-        for (int i = 0; i < 4; ++i) corners[i] = level.probes[size_t(level.tets[t].v[i])];
-        if (!cellGridFacePlane(corners, f, node.plane))
-          return fail(LevelStatus::kCorrupt, name + "cell grid node " + std::to_string(n) + " names face " +
-                                                 std::to_string(f) + " of tet " + std::to_string(t) +
-                                                 ", which is flat");
-      } else {
+    if (gridPacked) {
+      // The planes are recomputed from the faces, as buildCellGrid computed them (cellGridFacePlane).
+      const uint64_t at = kCellGridHeaderBytes + gridSlots * kSlotBytes;
+      if (std::string e =
+              runtime_detail::decodeBspNodes(data + grid.offset + at, size_t(grid.size - at),
+                                             size_t(gridNodes), level.tets, level.probes, g.nodes);
+          !e.empty())
+        return fail(LevelStatus::kCorrupt, name + e);
+    } else {
+      g.nodes.resize(size_t(gridNodes));
+      for (BspNode& node : g.nodes) {
         for (float& x : node.plane) x = body.f32();
+        for (int32_t& c : node.child) c = body.i32();
       }
-      for (int32_t& c : node.child) c = body.i32();
     }
   }
 

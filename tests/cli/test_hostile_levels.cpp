@@ -95,7 +95,7 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   ASSERT_EQ(run("inspect " + good.string()).code, 0);
 
   const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tets = section(level, "TETC"),
-               cgr3 = section(level, "CGR3"), kind = section(level, "KIND");
+               cgr4 = section(level, "CGR4"), kind = section(level, "KIND");
   const uint64_t probeCount = getU64(level, 48), tetCount = getU64(level, 56);
   ASSERT_GE(tetCount, 4u);
   // TETC records: four probe indices of 2 bytes each below 65,536 probes (docs/level_format.md).
@@ -176,11 +176,22 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
          std::memmove(b.data() + to, b.data() + from, 12);
        },
        true},
-      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr3 + 12, 0.0f); }, true},
-      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr3 + 48, 1ull << 33); }, true},
-      // CGR3 node 0 names its plane's face by tet << 2 | face: a tet past the last.
+      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr4 + 12, 0.0f); }, true},
+      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr4 + 48, 1ull << 33); }, true},
+      // CGR4's node stream starts with node 0's varint, zigzag(tet) << 6 | face and child codes: five bytes
+      // over it make 2^36 - 1, a tet 2^29 before the first.
       {"grid_node_face_of_missing_tet",
-       [&](Bytes& b) { putU32(b, size_t(cgr3 + 64 + 16 * getU64(b, cgr3 + 48)), uint32_t(tetCount) << 2); },
+       [&](Bytes& b) {
+         const size_t stream = size_t(cgr4 + 64 + 16 * getU64(b, cgr4 + 48));
+         for (int i = 0; i < 5; ++i) b[stream + size_t(i)] = char(i < 4 ? 0xFF : 0x0F);
+       },
+       true},
+      // The same stream opened with a varint that never ends within 64 bits.
+      {"grid_node_varint_overlong",
+       [&](Bytes& b) {
+         const size_t stream = size_t(cgr4 + 64 + 16 * getU64(b, cgr4 + 48));
+         for (int i = 0; i < 11; ++i) b[stream + size_t(i)] = char(0xFF);
+       },
        true},
       {"probe_kind_unknown", [&](Bytes& b) { b[kind] = 200; }, true},
   };

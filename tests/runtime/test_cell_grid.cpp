@@ -347,7 +347,7 @@ TEST(CellGrid, DeterministicForAnyThreadCount) {
   }
 }
 
-// The level file stores a node as the tet face its plane was cut from (CGR3) and recomputes the plane on load
+// The level file stores a node as the tet face its plane was cut from (CGR4) and recomputes the plane on load
 // with cellGridFacePlane: that holds only if every node plane is, bit for bit, some face's cellGridFacePlane.
 TEST(CellGrid, EveryNodePlaneIsTheFloatPlaneOfATetFace) {
   for (const Level& level : {ballLevel(), boxLevel(), latticeLevel()}) {

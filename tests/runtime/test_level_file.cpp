@@ -4,11 +4,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include "test_levels.h"
@@ -111,6 +113,15 @@ size_t sectionOffset(const std::vector<char>& b, const char* tag) {
   return 0;
 }
 
+// Size in bytes of the section tagged `tag`.
+size_t sectionSize(const std::vector<char>& b, const char* tag) {
+  const uint32_t n = getU32(b, 72);
+  for (uint32_t i = 0; i < n; ++i)
+    if (getU32(b, 80 + 24 * i) == tagOf(tag)) return size_t(getU64(b, 80 + 24 * i + 16));
+  ADD_FAILURE() << "no section " << tag;
+  return 0;
+}
+
 // `bytes`, written and loaded, is refused as kCorrupt with a message holding `needle`, and nothing is loaded.
 void expectRefusedAsCorrupt(TempDir& dir, const std::vector<char>& bytes, const char* needle) {
   writeBytes(dir.file("refused.tpb"), bytes, bytes.size());
@@ -194,13 +205,16 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
   // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 68 bytes per
   // probe (12 position + 56 half-precision SH), 8 per tet (its probes, 2 bytes each below 65,536 probes),
-  // the generator, the cell grid (64-byte header, 16 per slot, 12 per node: the face its plane was cut from
-  // and two children; CGR3), a 4-byte CRC.
+  // the generator, the cell grid (64-byte header, 16 per slot, then the node stream of CGR4: 1 to 4 bytes a
+  // node on a level this small, its face varint plus leaves given explicitly), a 4-byte CRC.
   ASSERT_EQ(levelProbeIndexBytes(level.probes.size()), 2u);
-  EXPECT_EQ(bytesOf(dir.file("a.tpb")).size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() +
-                                                   8 * level.tets.size() + level.generator.size() + 64 +
-                                                   16 * g.slots.size() + 12 * g.nodes.size() + 4);
-  EXPECT_NE(sectionOffset(bytesOf(dir.file("a.tpb")), "CGR3"), 0u);
+  const std::vector<char> a = bytesOf(dir.file("a.tpb"));
+  ASSERT_NE(sectionOffset(a, "CGR4"), 0u);
+  const size_t stream = sectionSize(a, "CGR4") - 64 - 16 * g.slots.size();
+  EXPECT_GE(stream, g.nodes.size());
+  EXPECT_LE(stream, 4 * g.nodes.size());
+  EXPECT_EQ(a.size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() + 8 * level.tets.size() +
+                          level.generator.size() + 64 + 16 * g.slots.size() + stream + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -246,29 +260,22 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
   const size_t tets = sectionOffset(full, "TETC");
-  const size_t grid = sectionOffset(full, "CGR3"), slots = grid + 64,
-               nodes = slots + 16 * level.cellGrid.slots.size();
-  ASSERT_FALSE(level.cellGrid.nodes.empty());
+  const size_t grid = sectionOffset(full, "CGR4"), slots = grid + 64;
   size_t usedSlot = 0;
   while (level.cellGrid.slots[usedSlot].key[0] == INT32_MIN) ++usedSlot;
   const struct {
     size_t offset;
     uint32_t value;
     const char* needle;
-  } cases[] = {
-      {tets + 0, uint32_t(level.probes.size()) | uint32_t(level.tets[0].v[1]) << 16,
-       "out of range"},  // tet 0 vertex 0 (2-byte indices: vertex 1 kept)
-      {tets + 8, uint32_t(level.probes.size()) | uint32_t(level.tets[1].v[1]) << 16,
-       "out of range"},  // tet 1 vertex 0
-      {tets + 0, uint32_t(level.tets[0].v[0]) | uint32_t(level.tets[0].v[0]) << 16,
-       "repeated"},  // tet 0 vertex 1 = vertex 0
-      {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
-      {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
-      {nodes + 4, 0u, "child out of range"},  // node 0's under child: itself, not a later node
-      {nodes + 8, uint32_t(~int32_t(level.tets.size() + 2)), "child out of range"},
-      {nodes + 0, uint32_t(level.tets.size()) << 2, "names tet"},  // node 0's face: a tet past the end
-      {nodes + 12, ~0u, "names tet"},
-      {grid + 12, 0x7FC00000u, "cell size"}};
+  } cases[] = {{tets + 0, uint32_t(level.probes.size()) | uint32_t(level.tets[0].v[1]) << 16,
+                "out of range"},  // tet 0 vertex 0 (2-byte indices: vertex 1 kept)
+               {tets + 8, uint32_t(level.probes.size()) | uint32_t(level.tets[1].v[1]) << 16,
+                "out of range"},  // tet 1 vertex 0
+               {tets + 0, uint32_t(level.tets[0].v[0]) | uint32_t(level.tets[0].v[0]) << 16,
+                "repeated"},  // tet 0 vertex 1 = vertex 0
+               {slots + 16 * usedSlot + 12, uint32_t(level.cellGrid.nodes.size() + 5), "root out of range"},
+               {slots + 16 * usedSlot + 12, uint32_t(~int32_t(level.tets.size())), "root out of range"},
+               {grid + 12, 0x7FC00000u, "cell size"}};
   for (const auto& c : cases) {
     std::vector<char> b = full;
     putU32(b, c.offset, c.value);
@@ -519,7 +526,7 @@ std::vector<char> withFloatShSection(const std::vector<char>& full, const std::v
   return withSectionReplaced(full, "SHRH", "SHRG", floats);
 }
 
-// The cell grid as written before CGR3 (CGR2: the same 64-byte header and 16-byte slots, 24-byte nodes with
+// The cell grid as written before CGR4 (CGR2: the same 64-byte header and 16-byte slots, 24-byte nodes with
 // their float planes).
 std::string cellGridWithPlanes(const CellGrid& g) {
   std::string out;
@@ -559,7 +566,7 @@ std::vector<char> withOldTetsAndOuterCells(const std::vector<char>& full, const 
     for (const auto& nrm : c.normal) put(nrm, 12);
     cells.append(12, '\0');
   }
-  return withExtraSection(withSectionReplaced(withSectionReplaced(full, "TETC", "TETS", tets), "CGR3", "CGR2",
+  return withExtraSection(withSectionReplaced(withSectionReplaced(full, "TETC", "TETS", tets), "CGR4", "CGR2",
                                               cellGridWithPlanes(level.cellGrid)),
                           "OUTC", 0, cells);
 }
@@ -671,35 +678,37 @@ TEST(LevelFile, RefusesShBeyondHalfPrecisionRange) {
   EXPECT_TRUE(saveLevel(dir.file("big.tpb"), level));
 }
 
-// Levels written before leaves named one tet carry the retired CGRD section (leaves listing up to 8 tets): it
-// is skipped like any unknown optional section, and the query builds the grid itself, answering as a level
-// that stores one.
+// Levels written before leaves named one tet carry the retired CGRD section (leaves listing up to 8 tets),
+// and levels of session 14 the retired CGR3 (12-byte nodes): each is skipped like any unknown optional
+// section, and the query builds the grid itself, answering as a level that stores one.
 TEST(LevelFile, RetiredCellGridSectionIsSkippedAndRebuilt) {
-  TempDir dir;
-  Level level = smallLevel();
-  const Level stored = level;
-  level.cellGrid = CellGrid{};
-  ASSERT_TRUE(saveLevel(dir.file("bare.tpb"), level));
-  const std::vector<char> b =
-      withExtraSection(bytesOf(dir.file("bare.tpb")), "CGRD", 0, std::string(64 + 16 * 16, '\x01'));
-  writeBytes(dir.file("old.tpb"), b, b.size());
-  Level back;
-  const LevelResult r = loadLevel(dir.file("old.tpb"), back);
-  ASSERT_TRUE(r) << r.message;
-  EXPECT_TRUE(back.cellGrid.slots.empty());
-  const ProbeQuery rebuilt(back, 2.0f, 1), fromFile(stored, 2.0f, 1);
-  EXPECT_EQ(rebuilt.cellGrid().nodes.size(), stored.cellGrid.nodes.size());
-  for (int k = 0; k < 200; ++k) {
-    const glm::dvec3 x = back.origin + glm::dvec3(-2.5 + 0.025 * k, 0.3 - 0.004 * k, -3.2 + 0.032 * k);
-    const Location a = rebuilt.locate(x), c = fromFile.locate(x);
-    EXPECT_EQ(a.tet, c.tet);
-    EXPECT_EQ(a.weights, c.weights);
+  for (const char* retired : {"CGRD", "CGR3"}) {
+    TempDir dir;
+    Level level = smallLevel();
+    const Level stored = level;
+    level.cellGrid = CellGrid{};
+    ASSERT_TRUE(saveLevel(dir.file("bare.tpb"), level));
+    const std::vector<char> b =
+        withExtraSection(bytesOf(dir.file("bare.tpb")), retired, 0, std::string(64 + 16 * 16, '\x01'));
+    writeBytes(dir.file("old.tpb"), b, b.size());
+    Level back;
+    const LevelResult r = loadLevel(dir.file("old.tpb"), back);
+    ASSERT_TRUE(r) << r.message;
+    EXPECT_TRUE(back.cellGrid.slots.empty());
+    const ProbeQuery rebuilt(back, 2.0f, 1), fromFile(stored, 2.0f, 1);
+    EXPECT_EQ(rebuilt.cellGrid().nodes.size(), stored.cellGrid.nodes.size());
+    for (int k = 0; k < 200; ++k) {
+      const glm::dvec3 x = back.origin + glm::dvec3(-2.5 + 0.025 * k, 0.3 - 0.004 * k, -3.2 + 0.032 * k);
+      const Location a = rebuilt.locate(x), c = fromFile.locate(x);
+      EXPECT_EQ(a.tet, c.tet);
+      EXPECT_EQ(a.weights, c.weights);
+    }
   }
 }
 
-// saveLevel stores a node as the tet face its plane was cut from (CGR3) only when every node's plane is such
-// a face bit for bit; a grid built some other way (here: one plane nudged by an ulp) is written with its
-// planes (CGR2, the format of earlier levels), which still loads bit for bit. A file with both is refused.
+// saveLevel packs the grid's nodes (CGR4) only when every node's plane is a tet face's bit for bit; a grid
+// built some other way (here: one plane nudged by an ulp) is written with its planes (CGR2, the format of
+// earlier levels), which still loads bit for bit. A file with both is refused.
 TEST(LevelFile, GridNotCutFromTetFacesIsWrittenWithItsPlanes) {
   TempDir dir;
   Level level = smallLevel();
@@ -717,7 +726,174 @@ TEST(LevelFile, GridNotCutFromTetFacesIsWrittenWithItsPlanes) {
                         level.cellGrid.nodes.size() * sizeof(BspNode)),
             0);
 
-  expectRefusedAsCorrupt(dir, withExtraSection(full, "CGR3", 0, std::string(64, '\0')), "both CGR2 and CGR3");
+  expectRefusedAsCorrupt(dir, withExtraSection(full, "CGR4", 0, std::string(64, '\0')), "both CGR2 and CGR4");
+}
+
+// LEB128, as the CGR4 node stream stores its numbers (runtime/src/bsp_codec.h), to forge streams.
+std::string varint(uint64_t v) {
+  std::string out;
+  for (; v >= 0x80; v >>= 7) out.push_back(char(uint8_t(v) | 0x80));
+  out.push_back(char(uint8_t(v)));
+  return out;
+}
+uint64_t zigzag(int64_t v) {
+  return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1u : uint64_t(v) << 1;
+}
+
+// The grid's node renumbered breadth first in each tree: the same trees (children still after their
+// parents, the same answer everywhere), but not the preorder buildCellGrid lays out.
+CellGrid breadthFirst(const CellGrid& g) {
+  CellGrid out = g;
+  std::vector<int32_t> order, newIndex(g.nodes.size(), -1);
+  std::vector<int32_t> roots;
+  for (size_t n = 0; n < g.nodes.size(); ++n) {
+    bool isChild = false;  // a root: no node names it (trees are laid out one after another)
+    for (size_t m = 0; m < n && !isChild; ++m)
+      isChild = g.nodes[m].child[0] == int32_t(n) || g.nodes[m].child[1] == int32_t(n);
+    if (!isChild) roots.push_back(int32_t(n));
+  }
+  for (int32_t root : roots) {
+    const size_t begin = order.size();
+    order.push_back(root);
+    for (size_t i = begin; i < order.size(); ++i)
+      for (int32_t c : g.nodes[size_t(order[i])].child)
+        if (c >= 0) order.push_back(c);
+  }
+  for (size_t i = 0; i < order.size(); ++i) newIndex[size_t(order[i])] = int32_t(i);
+  for (size_t i = 0; i < order.size(); ++i) {
+    out.nodes[i] = g.nodes[size_t(order[i])];
+    for (int32_t& c : out.nodes[i].child)
+      if (c >= 0) c = newIndex[size_t(c)];
+  }
+  for (CellSlot& slot : out.slots)
+    if (slot.key[0] != INT32_MIN && slot.root >= 0) slot.root = newIndex[size_t(slot.root)];
+  return out;
+}
+
+// The packed node stream (CGR4) codes each leaf as its node's face tet, the tet across that face, an explicit
+// tet or the empty leaf, and each node child by position in preorder. Over levels of several shapes and
+// grids (cell sizes, one-tet and default leaves) every kind occurs, and every grid comes back bit for bit.
+TEST(LevelFile, PackedGridNodesRoundTripEveryLeafKind) {
+  TempDir dir;
+  size_t kinds[4] = {0, 0, 0, 0};  // face tet, across the face, other tet, empty
+  int grids = 0;
+  for (bool corners : {true, false})
+    for (float cellSize : {1.0f, 4.0f})
+      for (int leafTets : {1, kDefaultLeafTets}) {
+        Level level = test::makeLevel(test::randomBoxPoints(150, 11, {-3, -2, -3}, {3, 2, 3}, corners),
+                                      {-7.5, 3.25, 120.0}, 4);
+        level.cellGrid = buildCellGrid(level.probes, level.tets, cellSize, 2, leafTets);
+        const CellGrid& g = level.cellGrid;
+        ASSERT_TRUE(saveLevel(dir.file("g.tpb"), level));
+        Level back;
+        const LevelResult r = loadLevel(dir.file("g.tpb"), back);
+        ASSERT_TRUE(r) << r.message;
+        EXPECT_NE(sectionOffset(bytesOf(dir.file("g.tpb")), "CGR4"), 0u);
+        ASSERT_EQ(back.cellGrid.nodes.size(), g.nodes.size());
+        EXPECT_EQ(std::memcmp(back.cellGrid.nodes.data(), g.nodes.data(), g.nodes.size() * sizeof(BspNode)),
+                  0);
+        ASSERT_EQ(back.cellGrid.slots.size(), g.slots.size());
+        EXPECT_EQ(std::memcmp(back.cellGrid.slots.data(), g.slots.data(), g.slots.size() * sizeof(CellSlot)),
+                  0);
+        ++grids;
+        // Each leaf's kind: the node's face is the first tet face whose float plane is the node's bit for
+        // bit (back.tets carry the neighbours the loader derived).
+        std::map<std::array<uint32_t, 4>, std::pair<int32_t, int>> faceOf;
+        for (size_t t = 0; t < back.tets.size(); ++t) {
+          glm::vec3 c[4];
+          for (int i = 0; i < 4; ++i) c[i] = back.probes[size_t(back.tets[t].v[i])];
+          for (int f = 0; f < 4; ++f) {
+            std::array<uint32_t, 4> key;
+            if (cellGridFacePlane(c, f, reinterpret_cast<float*>(key.data())))
+              faceOf.emplace(key, std::make_pair(int32_t(t), f));
+          }
+        }
+        for (const BspNode& node : g.nodes) {
+          std::array<uint32_t, 4> key;
+          std::memcpy(key.data(), node.plane, sizeof node.plane);
+          const auto it = faceOf.find(key);
+          ASSERT_NE(it, faceOf.end());
+          const auto [faceTet, face] = it->second;
+          for (int32_t child : node.child) {
+            if (child >= 0) continue;
+            const int32_t leaf = bspLeafTet(child);
+            ++kinds[leaf < 0 ? 3 : leaf == faceTet ? 0 : leaf == back.tets[size_t(faceTet)].n[face] ? 1 : 2];
+          }
+        }
+      }
+  EXPECT_EQ(grids, 8);
+  for (int k = 0; k < 4; ++k) EXPECT_GT(kinds[k], 0u) << "leaf kind " << k;
+}
+
+// The stream holds no node indices: it can only describe preorder trees. A grid laid out otherwise (here the
+// same trees breadth first) is written with its planes and indices (CGR2) and loads bit for bit.
+TEST(LevelFile, GridNotInPreorderIsWrittenWithItsPlanes) {
+  TempDir dir;
+  Level level = test::makeLevel(test::randomBoxPoints(150, 11, {-3, -2, -3}, {3, 2, 3}), {0, 0, 0}, 4);
+  level.cellGrid = breadthFirst(buildCellGrid(level.probes, level.tets, 4.0f, 1));
+  const CellGrid& g = level.cellGrid;
+  ASSERT_TRUE(saveLevel(dir.file("bfs.tpb"), level));
+  EXPECT_NE(sectionOffset(bytesOf(dir.file("bfs.tpb")), "CGR2"), 0u);
+  Level back;
+  const LevelResult r = loadLevel(dir.file("bfs.tpb"), back);
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_EQ(back.cellGrid.nodes.size(), g.nodes.size());
+  EXPECT_EQ(std::memcmp(back.cellGrid.nodes.data(), g.nodes.data(), g.nodes.size() * sizeof(BspNode)), 0);
+  // The same point answers from the renumbered grid as from the built one.
+  const CellGrid built = buildCellGrid(level.probes, level.tets, 4.0f, 1);
+  EXPECT_NE(std::memcmp(built.nodes.data(), g.nodes.data(), g.nodes.size() * sizeof(BspNode)), 0);
+  for (const glm::dvec3& x : test::randomBoxPoints(500, 5, {-3.5, -2.5, -3.5}, {3.5, 2.5, 3.5}, false))
+    EXPECT_EQ(cellGridLeaf(back.cellGrid, x), cellGridLeaf(built, x));
+}
+
+// A forged node stream with valid checksums is refused with a message naming what is wrong, whatever part of
+// a varint it breaks: a face of a missing tet, a leaf across a hull face, an explicit leaf past the last tet,
+// an overlong varint, a stream cut short or with bytes left over, more nodes than bytes, a tree left open.
+TEST(LevelFile, RejectsForgedGridNodeStreams) {
+  TempDir dir;
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), smallLevel()));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  Level level;
+  ASSERT_TRUE(loadLevel(dir.file("full.tpb"), level));  // with the neighbours the loader derives
+  ASSERT_FALSE(level.cellGrid.nodes.empty());
+  const size_t grid = sectionOffset(full, "CGR4"), size = sectionSize(full, "CGR4");
+  const size_t fixed = 64 + 16 * level.cellGrid.slots.size();
+  const std::string head(full.begin() + long(grid), full.begin() + long(grid + fixed)),
+      stream(full.begin() + long(grid + fixed), full.begin() + long(grid + size));
+  const uint64_t tetCount = level.tets.size();
+  int32_t hullTet = -1, hullFace = -1;
+  for (size_t t = 0; t < level.tets.size() && hullTet < 0; ++t)
+    for (int f = 0; f < 4 && hullTet < 0; ++f)
+      if (level.tets[t].n[f] < 0) {
+        hullTet = int32_t(t);
+        hullFace = f;
+      }
+  ASSERT_GE(hullTet, 0);
+  // The section with `nodes` nodes and stream `s`.
+  const auto section = [&](uint64_t nodes, const std::string& s) {
+    std::string b = head;
+    for (int i = 0; i < 8; ++i) b[56 + size_t(i)] = char(uint8_t(nodes >> (8 * i)));
+    return withSectionReplaced(full, "CGR4", "CGR4", b + s);
+  };
+  const uint64_t n = level.cellGrid.nodes.size();
+  const auto leafLeaf = [](int64_t delta, int face, uint32_t c0, uint32_t c1) {
+    return varint(zigzag(delta) << 6 | uint64_t(face) << 4 | c0 << 2 | c1);
+  };
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(int64_t(tetCount), 0, 1, 1)), "names a tet past the last");
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(-1, 0, 1, 1)), "names a tet past the last");
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(hullTet, hullFace, 1, 2)), "a hull face");
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(0, 0, 3, 1) + varint(zigzag(int64_t(tetCount)) + 1)),
+                         "a leaf naming a tet past the last");
+  expectRefusedAsCorrupt(dir, section(1, std::string(11, char(0xFF)) + '\0'), "overlong");
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(0, 0, 3, 1)), "truncated");
+  expectRefusedAsCorrupt(dir, section(1, leafLeaf(0, 0, 0, 1)), "stream ends inside a tree");
+  expectRefusedAsCorrupt(dir, section(n, stream + '\0'), "after the last node");
+  expectRefusedAsCorrupt(dir, section(n, stream.substr(0, stream.size() - 1)), "truncated");
+  expectRefusedAsCorrupt(dir, section(stream.size() + 1, stream), "size does not match");  // > a byte a node
+  // The untouched stream through the same path still loads: the forgeries, not the helper, are refused.
+  writeBytes(dir.file("same.tpb"), section(n, stream), full.size());
+  Level same;
+  EXPECT_TRUE(loadLevel(dir.file("same.tpb"), same));
 }
 
 // A section flagged as required that this reader does not know must not be ignored.

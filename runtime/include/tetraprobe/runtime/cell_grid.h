@@ -90,7 +90,9 @@ uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 // takes the remaining steps, usually one or two: leafTets = 1 makes the leaf's tet the answer for every
 // point, at about four times the nodes of the default on placed levels (docs/point_location.md)). A tet whose cells would lie beyond +-2^30 on an axis (huge coordinates for the cell size) or
 // number more than 4096 is left out, to be found by the walk; no float reaches an int conversion unchecked.
-// Deterministic for any `threads` (0 = all cores). Allocates the result.
+// Nodes are laid out tree by tree in cell order, each tree in preorder (a node, its under subtree, its over
+// subtree): the level file relies on it to store no node indices (CGR4). Deterministic for any `threads`
+// (0 = all cores). Allocates the result.
 inline constexpr int kDefaultLeafTets = 6;
 CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<Tet>& tets,
                        float cellSize = 16.0f, int threads = 0, int leafTets = kDefaultLeafTets);
@@ -99,7 +101,7 @@ CellGrid buildCellGrid(const std::vector<glm::vec3>& probes, const std::vector<T
 // probe positions in its v order), unit outward normal (away from corners[f]) and offset, computed in double
 // and rounded to float (`plane`, what a BspNode stores). False for a flat face. Every node plane
 // buildCellGrid makes is one of these, which lets the level file store a node as the face it was cut from
-// (docs/level_format.md, CGR3) and the loader recompute the same floats.
+// (docs/level_format.md, CGR4) and the loader recompute the same floats.
 bool cellGridFacePlane(const glm::vec3 corners[4], int f, float plane[4]);
 
 // The tet named by the leaf holding local point x, or -1 (x's cell is absent or its leaf empty: x is then
