@@ -1,6 +1,6 @@
 // What loading a level costs now that the file stores what the load can derive: tets without neighbours
-// (TETC, 2-byte indices here), no outer cells, BSP nodes as a varint stream of the tet faces of their planes (CGR4) and packed
-// occlusion (OCC2). Measured: the whole loadLevelFromMemory (parse, derive neighbours, recompute planes,
+// (TETM, probe indices packed against the last ones named), no outer cells, BSP nodes as a varint stream of
+// the tet faces of their planes (CGR4) and packed occlusion (OCC2). Measured: the whole loadLevelFromMemory (parse, derive neighbours, recompute planes,
 // validate), the neighbour derivation alone, the outer cells ProbeQuery builds, and peers in the same run:
 // loading the same level written the session-12 way (TETS tets with neighbours, CGR2 float planes, OCCL
 // fixed records) and copying the file's bytes (the floor of any load). Rates are probes/s on a synthetic
@@ -78,10 +78,10 @@ std::map<std::string, std::pair<std::string, std::string>> oldSections(const Lev
     append(occ, v);
   occ.append(reinterpret_cast<const char*>(o.tets.data()), o.tets.size() * sizeof(TetOcclusion));
   occ.append(reinterpret_cast<const char*>(o.planes.data()), o.planes.size() * sizeof(OcclusionPlane));
-  return {{"TETC", {"TETS", tets}}, {"CGR4", {"CGR2", grid}}, {"OCC2", {"OCCL", occ}}};
+  return {{"TETM", {"TETS", tets}}, {"CGR4", {"CGR2", grid}}, {"OCC2", {"OCCL", occ}}};
 }
 
-// `file` with its TETC, CGR4 and OCC2 sections replaced by the session-12 ones, checksums fixed.
+// `file` with its TETM, CGR4 and OCC2 sections replaced by the session-12 ones, checksums fixed.
 std::vector<char> withOldSections(const std::vector<char>& file, const Level& level) {
   const auto replaced = oldSections(level);
   const size_t n = size_t(getU(file, 72, 4)), tableEnd = 80 + 24 * n + 4;

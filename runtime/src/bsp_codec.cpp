@@ -3,41 +3,12 @@
 
 #include <utility>
 
+#include "varint.h"
+
 namespace tetraprobe::runtime_detail {
 namespace {
 
 enum ChildCode : uint32_t { kChildNode = 0, kLeafFaceTet = 1, kLeafAcross = 2, kLeafExplicit = 3 };
-
-uint64_t zigzag(int64_t v) {
-  return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1u : uint64_t(v) << 1;
-}
-int64_t unzigzag(uint64_t z) {
-  return (z & 1u) ? -int64_t(z >> 1) - 1 : int64_t(z >> 1);
-}
-
-void putVarint(std::string& out, uint64_t v) {
-  while (v >= 0x80) {
-    out.push_back(char(uint8_t(v) | 0x80));
-    v >>= 7;
-  }
-  out.push_back(char(uint8_t(v)));
-}
-
-// LEB128 at p[*at]; false when the bytes end first or it runs past 64 bits.
-bool getVarint(const uint8_t* p, size_t size, size_t* at, uint64_t* v) {
-  uint64_t r = 0;
-  for (int shift = 0; shift < 64; shift += 7) {
-    if (*at >= size) return false;
-    const uint8_t b = p[(*at)++];
-    if (shift == 63 && b > 1) return false;
-    r |= uint64_t(b & 0x7F) << shift;
-    if (!(b & 0x80)) {
-      *v = r;
-      return true;
-    }
-  }
-  return false;
-}
 
 }  // namespace
 

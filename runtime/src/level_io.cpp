@@ -21,6 +21,7 @@
 
 #include "bsp_codec.h"
 #include "crc32.h"
+#include "tet_codec.h"
 
 namespace tetraprobe {
 namespace {
@@ -38,7 +39,9 @@ constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficien
 constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
 constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // TETS (read only): v[4] i32, n[4] i32
 // TETC: v[4], each levelProbeIndexBytes(P) bytes (2, 3 or 4; neighbours derived on load).
-constexpr uint64_t kMinTetCompactBytes = 4 * 2;
+// TETM: two control bytes a tet and a varint for each probe not among the last 15 named (tet_codec.h); its
+// two bytes a tet are the least any tet section takes.
+constexpr uint64_t kMinTetBytes = 2;
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
@@ -59,10 +62,10 @@ constexpr uint32_t tag(const char (&s)[5]) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
-                   kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagGenerator = tag("GENR"),
-                   kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"), kTagCellGridPacked = tag("CGR4"),
-                   kTagOcclusion = tag("OCCL"), kTagOcclusionPacked = tag("OCC2"),
-                   kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
+                   kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagTetsPacked = tag("TETM"),
+                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
+                   kTagCellGridPacked = tag("CGR4"), kTagOcclusion = tag("OCCL"),
+                   kTagOcclusionPacked = tag("OCC2"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // OCC2: the counts and the cell-mask byte count (u64 each), then a code byte per tet (kind | plane count << 2)
@@ -216,7 +219,13 @@ bool finite3(const glm::vec3& v) {
 
 }  // namespace
 
-LevelResult validateLevel(const Level& level) {
+namespace {
+
+// validateLevel; `linked`: the tets' neighbours were derived by linkTetNeighbours from vertices already
+// checked (in range, pairwise distinct), so they are consistent by construction (the other tet naming the
+// same three probes names this one back across that face) and their checks are skipped. Everything else,
+// the flat-tet check included, runs either way.
+LevelResult validateLevelChecks(const Level& level, bool linked) {
   const auto corrupt = [](std::string m) { return fail(LevelStatus::kCorrupt, std::move(m)); };
   if ((level.content & ~uint32_t(kContentAll)) != 0)
     return corrupt("unknown content flags " + std::to_string(level.content) +
@@ -250,7 +259,7 @@ LevelResult validateLevel(const Level& level) {
                        std::to_string(i));
     }
   }
-  for (int64_t t = 0; t < tetCount; ++t) {
+  for (int64_t t = 0; t < tetCount && !linked; ++t) {
     const Tet& tet = level.tets[size_t(t)];
     const auto where = [t] { return "tet " + std::to_string(t) + ": "; };  // built only for a message
     for (int i = 0; i < 4; ++i) {
@@ -283,7 +292,7 @@ LevelResult validateLevel(const Level& level) {
         if (level.probes[size_t(tet.v[i])] == level.probes[size_t(tet.v[j])])
           return corrupt(where() + "flat: probes " + std::to_string(tet.v[j]) + " and " +
                          std::to_string(tet.v[i]) + " are at the same float position");
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < 4 && !linked; ++i) {
       const int32_t n = tet.n[i];
       if (n < 0) continue;
       const Tet& other = level.tets[size_t(n)];
@@ -431,6 +440,12 @@ LevelResult validateLevel(const Level& level) {
   return {};
 }
 
+}  // namespace
+
+LevelResult validateLevel(const Level& level) {
+  return validateLevelChecks(level, false);
+}
+
 LevelResult saveLevel(const std::string& path, const Level& level) {
   if (LevelResult v = validateLevel(level); !v)
     return fail(LevelStatus::kWriteFailed, path + ": refusing to write an invalid level: " + v.message);
@@ -459,10 +474,19 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   }
   // Tets: vertices only. Neighbours and outer cells are functions of them (linkTetNeighbours on load,
   // buildOuterCells in ProbeQuery), so they are not stored: 16 + 80 x hull faces / tets bytes a tet less.
-  sections.push_back({kTagTetsCompact, kSectionRequired, {}});
-  const uint32_t indexBytes = levelProbeIndexBytes(level.probes.size());
-  for (const Tet& t : level.tets)
-    for (int32_t v : t.v) sections.back().bytes.uN(uint32_t(v), indexBytes);
+  // Packed (TETM, about 4 bytes a tet) unless the level is streamed: its loader seeks each tet's fixed
+  // TETC record (2-4 bytes an index).
+  if (level.stream.empty()) {
+    sections.push_back({kTagTetsPacked, kSectionRequired, {}});
+    std::string packed;
+    runtime_detail::encodeTetProbes(level.tets, packed);
+    sections.back().bytes.bytes(packed.data(), packed.size());
+  } else {
+    sections.push_back({kTagTetsCompact, kSectionRequired, {}});
+    const uint32_t indexBytes = levelProbeIndexBytes(level.probes.size());
+    for (const Tet& t : level.tets)
+      for (int32_t v : t.v) sections.back().bytes.uN(uint32_t(v), indexBytes);
+  }
   sections.push_back({kTagGenerator, kSectionRequired, {}});
   sections.back().bytes.bytes(level.generator.data(), level.generator.size());
 
@@ -622,8 +646,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                            " probes, " + std::to_string(tetCount) + " tets, " +
                                            std::to_string(generatorBytes) + " generator bytes");
   const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
-  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) +
-                           tetCount * kMinTetCompactBytes + generatorBytes + kTrailerBytes;
+  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) + tetCount * kMinTetBytes +
+                           generatorBytes + kTrailerBytes;
   if (size < minimum)
     return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
                                              " bytes, the header needs at least " + std::to_string(minimum));
@@ -636,8 +660,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     uint64_t offset = 0, size = 0;
     bool present = false;
   };
-  Section probes, sh, shHalf, tets, tetsCompact, generator, outer, cellGrid, cellGridPacked, occlusionFixed,
-      occlusionPacked, kinds, stream;
+  Section probes, sh, shHalf, tets, tetsCompact, tetsPacked, generator, outer, cellGrid, cellGridPacked,
+      occlusionFixed, occlusionPacked, kinds, stream;
   uint64_t expected = tableEnd;
   Reader table(data + kHeaderBytes);
   for (uint32_t i = 0; i < sectionCount; ++i) {
@@ -652,6 +676,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                      : t == kTagShHalf          ? &shHalf
                      : t == kTagTets            ? &tets
                      : t == kTagTetsCompact     ? &tetsCompact
+                     : t == kTagTetsPacked      ? &tetsPacked
                      : t == kTagGenerator       ? &generator
                      : t == kTagOuterCells      ? &outer
                      : t == kTagCellGrid        ? &cellGrid
@@ -696,14 +721,22 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
                                      : sized(sh, probeCount * kShBytes, "SH");
       !e)
     return e;
-  // Tets: vertices only (TETC, what saveLevel writes) or with neighbours (TETS, levels written before it).
-  if (tets.present && tetsCompact.present)
-    return fail(LevelStatus::kCorrupt, name + "both TETS and TETC tet sections");
+  // Tets: vertices only, packed (TETM, what saveLevel writes) or in fixed records (TETC, streamed levels), or
+  // with neighbours (TETS, levels written before them); one of the three.
+  if (int(tets.present) + int(tetsCompact.present) + int(tetsPacked.present) > 1)
+    return fail(LevelStatus::kCorrupt, name + "more than one of the TETS, TETC and TETM tet sections");
+  const bool tetsLinked = tetsCompact.present || tetsPacked.present;  // neighbours derived on load
   const uint32_t indexBytes = levelProbeIndexBytes(probeCount);
-  if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * 4 * indexBytes, "tet")
-                                          : sized(tets, tetCount * kTetBytes, "tet");
-      !e)
+  if (tetsPacked.present) {
+    if (tetsPacked.size < 2 * tetCount)  // two control bytes a tet at least; the decoder checks the rest
+      return fail(LevelStatus::kCorrupt, name + "tet section of " + std::to_string(tetsPacked.size) +
+                                             " bytes, the header's counts need at least " +
+                                             std::to_string(2 * tetCount));
+  } else if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * 4 * indexBytes, "tet")
+                                                 : sized(tets, tetCount * kTetBytes, "tet");
+             !e) {
     return e;
+  }
   if (LevelResult e = sized(generator, generatorBytes, "generator"); !e) return e;
   if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
     return fail(LevelStatus::kCorrupt,
@@ -717,7 +750,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
   if (cellGrid.present && cellGridPacked.present)
     return fail(LevelStatus::kCorrupt, name + "both CGR2 and CGR4 cell grid sections");
   const bool gridPacked = cellGridPacked.present;
-  if (gridPacked && !tetsCompact.present)  // written together; CGR4 names tets the TETC parse range-checks
+  if (gridPacked && !tetsLinked)  // CGR4 refers to the neighbours the loader derives
     return fail(LevelStatus::kCorrupt, name + "a CGR4 cell grid with TETS tets");
   const Section& grid = gridPacked ? cellGridPacked : cellGrid;
   uint64_t gridSlots = 0, gridNodes = 0;
@@ -759,10 +792,19 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
   // Sizes are now known to be backed by the file: allocate and parse.
   Reader body(data + probes.offset);
   level.probes.resize(size_t(probeCount));
-  for (glm::vec3& p : level.probes) {
+  for (size_t i = 0; i < level.probes.size(); ++i) {
+    glm::vec3& p = level.probes[i];
     p.x = body.f32();
     p.y = body.f32();
     p.z = body.f32();
+    // Checked here as validateLevel would: the grid's planes are computed from positions before it runs,
+    // and a NaN would be reported as a flat face instead of as what it is.
+    if (!finite3(p))
+      return fail(LevelStatus::kCorrupt, name + "probe " + std::to_string(i) + ": non-finite position");
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxLocalCoordinate)
+      return fail(LevelStatus::kCorrupt, name + "probe " + std::to_string(i) + ": position beyond " +
+                                             std::to_string(int64_t(kMaxLocalCoordinate)) +
+                                             " m of the level origin");
   }
   level.sh.resize(size_t(probeCount));
   if (shHalf.present) {
@@ -788,7 +830,15 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       }
   }
   level.tets.resize(size_t(tetCount));
-  if (tetsCompact.present) {
+  if (tetsPacked.present) {
+    // Range and repeat checks as it decodes (linkTetNeighbours' precondition).
+    if (std::string e = runtime_detail::decodeTetProbes(data + tetsPacked.offset, size_t(tetsPacked.size),
+                                                        size_t(tetCount), size_t(probeCount), level.tets);
+        !e.empty())
+      return fail(LevelStatus::kCorrupt, name + e);
+    if (std::string e = linkTetNeighbours(level.tets, size_t(probeCount)); !e.empty())
+      return fail(LevelStatus::kCorrupt, name + e);
+  } else if (tetsCompact.present) {
     body = Reader(data + tetsCompact.offset);
     for (size_t t = 0; t < level.tets.size(); ++t) {
       Tet& tet = level.tets[t];
@@ -796,7 +846,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
         const uint32_t v = body.uN(indexBytes);
         tet.v[i] = int32_t(v);
         tet.n[i] = -1;
-        // linkTetNeighbours' precondition (validateLevel repeats these checks on the result).
+        // linkTetNeighbours' precondition (validateLevelChecks skips them, and the neighbour checks, for
+        // tets linked here).
         if (v >= probeCount)
           return fail(LevelStatus::kCorrupt, name + "tet " + std::to_string(t) + ": vertex " +
                                                  std::to_string(tet.v[i]) + " out of range (" +
@@ -932,7 +983,7 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     level.stream.assign(b, b + stream.size);
   }
 
-  if (LevelResult v = validateLevel(level); !v) return fail(v.status, name + v.message);
+  if (LevelResult v = validateLevelChecks(level, tetsLinked); !v) return fail(v.status, name + v.message);
   out = std::move(level);
   return {};
 }

@@ -209,6 +209,9 @@ LevelResult StreamingLevel::open(const std::string& path) {
       f->tets = offset, tetsSize = bytes, haveTets = true;
       f->tetRecord = t == tag("TETC") ? 4 * levelProbeIndexBytes(f->probeCount) : 32;
     }
+    if (t == tag("TETM"))  // saveLevel writes TETC for a level with a streaming index: load seeks its records
+      return fail(LevelStatus::kCorrupt,
+                  name + "packed tets (TETM) cannot be streamed: re-run tetraprobe stream");
     if (t == tag("OCCL")) f->occl = offset, occlSize = bytes;
     if (t == tag("OCC2"))  // saveLevel writes OCCL for a level with a streaming index: load seeks its records
       return fail(LevelStatus::kCorrupt,

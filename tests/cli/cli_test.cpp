@@ -451,6 +451,20 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
   const tetraprobe::LevelResult r = packed.open(path("packed.tpb").string());
   EXPECT_EQ(r.status, tetraprobe::LevelStatus::kCorrupt);
   EXPECT_NE(r.message.find("OCC2"), std::string::npos) << r.message;
+
+  // Likewise the tets: the bake packed them (TETM), `stream` wrote fixed records (TETC), and a streamed file
+  // holding TETM is refused at `open`, naming it.
+  EXPECT_NE(tetraprobe::test::section(tetraprobe::test::Bytes(baked.begin(), baked.end()), "TETM"), 0u);
+  tetraprobe::test::Bytes t(streamed.begin(), streamed.end());
+  for (uint32_t i = 0; i < tetraprobe::test::getU32(t, 72); ++i)
+    if (std::memcmp(&t[80 + 24 * i], "TETC", 4) == 0) std::memcpy(&t[80 + 24 * i], "TETM", 4);
+  tetraprobe::test::fixChecksums(t);
+  std::ofstream(path("packed_tets.tpb"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(t.data()), std::streamsize(t.size()));
+  tetraprobe::StreamingLevel packedTets;
+  const tetraprobe::LevelResult rt = packedTets.open(path("packed_tets.tpb").string());
+  EXPECT_EQ(rt.status, tetraprobe::LevelStatus::kCorrupt);
+  EXPECT_NE(rt.message.find("TETM"), std::string::npos) << rt.message;
 }
 
 // The same input and options give a bit-identical level whatever the thread count, and the report has the

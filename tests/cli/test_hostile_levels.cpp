@@ -93,9 +93,19 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   }
   ASSERT_GT(level.size(), 200u);
   ASSERT_EQ(run("inspect " + good.string()).code, 0);
+  // The same level with a streaming index keeps its tets in fixed records (TETC), which the tet cases forge
+  // index by index; the packed ones (TETM, what bake writes) get the cases tetm_*.
+  const fs::path streamedPath = dir_ / "streamed.tpb";
+  ASSERT_EQ(run("stream " + good.string() + " -o " + streamedPath.string()).code, 0);
+  Bytes streamed;
+  {
+    std::ifstream in(streamedPath, std::ios::binary);
+    streamed.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
 
-  const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tets = section(level, "TETC"),
+  const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tetm = section(level, "TETM"),
                cgr4 = section(level, "CGR4"), kind = section(level, "KIND");
+  const size_t tets = section(streamed, "TETC"), streamedPrbs = section(streamed, "PRBS");
   const uint64_t probeCount = getU64(level, 48), tetCount = getU64(level, 56);
   ASSERT_GE(tetCount, 4u);
   // TETC records: four probe indices of 2 bytes each below 65,536 probes (docs/level_format.md).
@@ -113,6 +123,7 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
     std::string name;
     std::function<void(Bytes&)> edit;  // applied to a copy of the good level
     bool fixCrc;                       // recompute the checksums after the edit
+    bool onStreamed = false;           // edit the streamed copy (fixed tet records) instead
   };
   const auto truncateTo = [](size_t n) { return [n](Bytes& b) { b.resize(std::min(n, b.size())); }; };
   std::vector<Case> cases = {
@@ -158,24 +169,32 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
       {"sh_scale_zero", [&](Bytes& b) { putU32(b, shrh + 52, getU32(b, shrh + 52) & 0xFFFFu); }, true},
       {"sh_scale_negative",
        [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0xBC000000u); }, true},
-      {"vertex_out_of_range", [&](Bytes& b) { putIndex(b, 0, 1, 1u << 15); }, true},
-      {"vertex_at_probe_count", [&](Bytes& b) { putIndex(b, 1, 2, uint32_t(probeCount)); }, true},
-      {"vertex_repeated", [&](Bytes& b) { putIndex(b, 0, 1, getIndex(b, 0, 0)); }, true},
+      {"vertex_out_of_range", [&](Bytes& b) { putIndex(b, 0, 1, 1u << 15); }, true, true},
+      {"vertex_at_probe_count", [&](Bytes& b) { putIndex(b, 1, 2, uint32_t(probeCount)); }, true, true},
+      {"vertex_repeated", [&](Bytes& b) { putIndex(b, 0, 1, getIndex(b, 0, 0)); }, true, true},
+      // TETM: tet 0 names its four probes by varints (control bytes 0xFF 0xFF; nothing is on the list yet).
+      {"tetm_recent_probe_unfilled", [&](Bytes& b) { b[tetm] = 0; }, true},
+      {"tetm_vertex_negative", [&](Bytes& b) { b[tetm + 2] = 0x7F; }, true},  // zigzag 127: probe -64
+      {"tetm_varint_overlong",
+       [&](Bytes& b) {
+         for (int i = 0; i < 11; ++i) b[tetm + 2 + size_t(i)] = char(0xFF);
+       },
+       true},
       // Neighbours are derived from the tets' probes on load: a tet copied over another gives faces of
       // three tets (not a tetrahedralization: a walk could not know which way to go).
       {"tet_copied_over_another",
        [&](Bytes& b) {
          for (int i = 0; i < 4; ++i) putIndex(b, tetCount / 2, i, getIndex(b, 0, i));
        },
-       true},
+       true, true},
       // Tet 0's second probe moved onto its first: flat in float (the build refuses such tets too).
       {"flat_tet",
        [&](Bytes& b) {
-         const size_t from = prbs + 12 * size_t(getIndex(b, 0, 0)),
-                      to = prbs + 12 * size_t(getIndex(b, 0, 1));
+         const size_t from = streamedPrbs + 12 * size_t(getIndex(b, 0, 0)),
+                      to = streamedPrbs + 12 * size_t(getIndex(b, 0, 1));
          std::memmove(b.data() + to, b.data() + from, 12);
        },
-       true},
+       true, true},
       {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr4 + 12, 0.0f); }, true},
       {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr4 + 48, 1ull << 33); }, true},
       // CGR4's node stream starts with node 0's varint, zigzag(tet) << 6 | face and child codes: five bytes
@@ -197,7 +216,7 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   };
 
   for (const Case& c : cases) {
-    Bytes b = level;
+    Bytes b = c.onStreamed ? streamed : level;
     c.edit(b);
     if (c.fixCrc) fixChecksums(b);
     const fs::path p = file(c.name + ".tpb", b);

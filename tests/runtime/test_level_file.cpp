@@ -132,6 +132,44 @@ void expectRefusedAsCorrupt(TempDir& dir, const std::vector<char>& bytes, const 
   EXPECT_TRUE(emptyLevel(out));
 }
 
+// checksum made consistent again: how files written before a section changed look.
+std::vector<char> withSectionReplaced(const std::vector<char>& full, const char* from, const char* to,
+                                      const std::string& data) {
+  const uint32_t n = getU32(full, 72);
+  const size_t tableEnd = 80 + 24 * size_t(n) + 4;
+  std::vector<char> b(full.begin(), full.begin() + long(tableEnd));
+  int64_t shift = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const size_t e = 80 + 24 * size_t(i);
+    const uint64_t offset = getU64(full, e + 8), size = getU64(full, e + 16);
+    putU64(b, e + 8, uint64_t(int64_t(offset) + shift));
+    if (getU32(full, e) == tagOf(from)) {
+      putU32(b, e, tagOf(to));
+      putU64(b, e + 16, data.size());
+      b.insert(b.end(), data.begin(), data.end());
+      shift += int64_t(data.size()) - int64_t(size);
+    } else {
+      b.insert(b.end(), full.begin() + long(offset), full.begin() + long(offset + size));
+    }
+  }
+  putU32(b, tableEnd - 4, crc32(b.data() + 80, tableEnd - 4 - 80));
+  b.resize(b.size() + 4);
+  fixPayloadCrc(b);
+  return b;
+}
+
+// The file with its packed tets (TETM) written as fixed records instead (TETC: each probe index in
+// levelProbeIndexBytes(P) bytes, what a streamed level stores), for `tets` (the level's, or forged ones).
+std::vector<char> withFixedTetRecords(const std::vector<char>& full, const std::vector<Tet>& tets,
+                                      size_t probeCount) {
+  const uint32_t w = levelProbeIndexBytes(probeCount);
+  std::string records;
+  for (const Tet& t : tets)
+    for (int32_t v : t.v)
+      for (uint32_t k = 0; k < w; ++k) records.push_back(char(uint8_t(uint32_t(v) >> (8 * k))));
+  return withSectionReplaced(full, "TETM", "TETC", records);
+}
+
 // The file with one more section appended (table entry, data), every checksum made consistent again.
 std::vector<char> withExtraSection(const std::vector<char>& full, const char* tag, uint32_t flags,
                                    const std::string& data) {
@@ -204,17 +242,22 @@ TEST(LevelFile, RoundTripIsBitExact) {
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("b.tpb")));
   EXPECT_EQ(bytesOf(dir.file("a.tpb")), bytesOf(dir.file("c.tpb")));
   // The documented size: 80-byte header, five 24-byte table entries and the table's CRC, 68 bytes per
-  // probe (12 position + 56 half-precision SH), 8 per tet (its probes, 2 bytes each below 65,536 probes),
-  // the generator, the cell grid (64-byte header, 16 per slot, then the node stream of CGR4: 1 to 4 bytes a
-  // node on a level this small, its face varint plus leaves given explicitly), a 4-byte CRC.
-  ASSERT_EQ(levelProbeIndexBytes(level.probes.size()), 2u);
+  // probe (12 position + 56 half-precision SH), the tets' packed probes (TETM: two control bytes a tet and a
+  // one-byte varint for each probe not among the last 15 named, all of them below 64 apart here), the
+  // generator, the cell grid (64-byte header, 16 per slot, then the node stream of CGR4: 1 to 4 bytes a node
+  // on a level this small, its face varint plus leaves given explicitly), a 4-byte CRC.
   const std::vector<char> a = bytesOf(dir.file("a.tpb"));
+  ASSERT_NE(sectionOffset(a, "TETM"), 0u);
   ASSERT_NE(sectionOffset(a, "CGR4"), 0u);
+  ASSERT_LT(level.probes.size(), 64u);
+  const size_t tets = sectionSize(a, "TETM");
+  EXPECT_GE(tets, 2 * level.tets.size() + level.probes.size());  // each probe given once at least
+  EXPECT_LE(tets, 6 * level.tets.size());
   const size_t stream = sectionSize(a, "CGR4") - 64 - 16 * g.slots.size();
   EXPECT_GE(stream, g.nodes.size());
   EXPECT_LE(stream, 4 * g.nodes.size());
-  EXPECT_EQ(a.size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() + 8 * level.tets.size() +
-                          level.generator.size() + 64 + 16 * g.slots.size() + stream + 4);
+  EXPECT_EQ(a.size(), 80 + 5 * 24 + 4 + 68 * level.probes.size() + tets + level.generator.size() + 64 +
+                          16 * g.slots.size() + stream + 4);
 }
 
 // An interrupted copy or download leaves a prefix: every prefix must be reported, never read past its end.
@@ -258,7 +301,10 @@ TEST(LevelFile, RejectsOutOfRangeIndicesWithValidChecksums) {
   TempDir dir;
   const Level level = smallLevel();
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
-  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  // Fixed tet records (TETC, as a streamed level stores them) to forge indices in place; the packed form's
+  // forgeries are in RejectsForgedTetStreams.
+  const std::vector<char> full =
+      withFixedTetRecords(bytesOf(dir.file("full.tpb")), level.tets, level.probes.size());
   const size_t tets = sectionOffset(full, "TETC");
   const size_t grid = sectionOffset(full, "CGR4"), slots = grid + 64;
   size_t usedSlot = 0;
@@ -314,15 +360,26 @@ TEST(LevelFile, ProbeIndicesTakeThreeBytesAbove65536Probes) {
     for (int32_t& v : t.v) v += int32_t(extra);
   level.outerCells.clear();
   level.cellGrid = CellGrid{};
+  // A level with a streaming index keeps fixed records (TETC: the streaming loader seeks them); the bytes of
+  // the index are carried unparsed by saveLevel and loadLevel.
+  level.stream = {'S', 'T', 'R', 'M'};
   ASSERT_TRUE(saveLevel(dir.file("wide.tpb"), level));
   const std::vector<char> b = bytesOf(dir.file("wide.tpb"));
   const size_t tets = sectionOffset(b, "TETC"), generator = sectionOffset(b, "GENR");
   EXPECT_EQ(generator - tets, 12 * level.tets.size());
-  Level back;
-  const LevelResult r = loadLevel(dir.file("wide.tpb"), back);
-  ASSERT_TRUE(r) << r.message;
-  ASSERT_EQ(back.tets.size(), level.tets.size());
-  EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0);
+  // Packed (TETM, no streaming index) the probes' indices above 2^16 are given as 3-byte varints.
+  Level packed = level;
+  packed.stream.clear();
+  ASSERT_TRUE(saveLevel(dir.file("packed.tpb"), packed));
+  const std::vector<char> p = bytesOf(dir.file("packed.tpb"));
+  EXPECT_LT(sectionSize(p, "TETM"), 12 * level.tets.size());
+  for (const char* file : {"wide.tpb", "packed.tpb"}) {
+    Level back;
+    const LevelResult r = loadLevel(dir.file(file), back);
+    ASSERT_TRUE(r) << file << ": " << r.message;
+    ASSERT_EQ(back.tets.size(), level.tets.size());
+    EXPECT_EQ(std::memcmp(back.tets.data(), level.tets.data(), level.tets.size() * sizeof(Tet)), 0) << file;
+  }
 }
 
 // Neighbours are derived from the stored probes of each tet (linkTetNeighbours): a file whose tets do not
@@ -333,19 +390,15 @@ TEST(LevelFile, RefusesTetsThatShareAFaceThreeWays) {
   const Level level = smallLevel();
   ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
   const std::vector<char> full = bytesOf(dir.file("full.tpb"));
-  const size_t tets = sectionOffset(full, "TETC");
   size_t interior = 0;
   while (interior < level.tets.size() &&
          *std::min_element(level.tets[interior].n, level.tets[interior].n + 4) < 0)
     ++interior;
   ASSERT_LT(interior, level.tets.size());
   const size_t victim = interior == 0 ? 1 : 0;
-  std::vector<char> b = full;
-  for (int i = 0; i < 4; ++i) {  // 2-byte indices (below 65,536 probes)
-    b[tets + 8 * victim + 2 * size_t(i)] = char(uint8_t(level.tets[interior].v[i]));
-    b[tets + 8 * victim + 2 * size_t(i) + 1] = char(uint8_t(level.tets[interior].v[i] >> 8));
-  }
-  fixPayloadCrc(b);
+  std::vector<Tet> forged = level.tets;
+  forged[victim] = level.tets[interior];
+  std::vector<char> b = withFixedTetRecords(full, forged, level.probes.size());
   writeBytes(dir.file("forged.tpb"), b, b.size());
   Level out;
   const LevelResult r = loadLevel(dir.file("forged.tpb"), out);
@@ -493,31 +546,6 @@ TEST(LevelFile, SkipsUnknownOptionalSection) {
 }
 
 // The file with section `from` replaced by section `to` holding `data` (same place in the table), every
-// checksum made consistent again: how files written before a section changed look.
-std::vector<char> withSectionReplaced(const std::vector<char>& full, const char* from, const char* to,
-                                      const std::string& data) {
-  const uint32_t n = getU32(full, 72);
-  const size_t tableEnd = 80 + 24 * size_t(n) + 4;
-  std::vector<char> b(full.begin(), full.begin() + long(tableEnd));
-  int64_t shift = 0;
-  for (uint32_t i = 0; i < n; ++i) {
-    const size_t e = 80 + 24 * size_t(i);
-    const uint64_t offset = getU64(full, e + 8), size = getU64(full, e + 16);
-    putU64(b, e + 8, uint64_t(int64_t(offset) + shift));
-    if (getU32(full, e) == tagOf(from)) {
-      putU32(b, e, tagOf(to));
-      putU64(b, e + 16, data.size());
-      b.insert(b.end(), data.begin(), data.end());
-      shift += int64_t(data.size()) - int64_t(size);
-    } else {
-      b.insert(b.end(), full.begin() + long(offset), full.begin() + long(offset + size));
-    }
-  }
-  putU32(b, tableEnd - 4, crc32(b.data() + 80, tableEnd - 4 - 80));
-  b.resize(b.size() + 4);
-  fixPayloadCrc(b);
-  return b;
-}
 
 // The file as written before SHRH: float SH (SHRG, 108-byte records).
 std::vector<char> withFloatShSection(const std::vector<char>& full, const std::vector<ShRgb>& sh) {
@@ -566,7 +594,7 @@ std::vector<char> withOldTetsAndOuterCells(const std::vector<char>& full, const 
     for (const auto& nrm : c.normal) put(nrm, 12);
     cells.append(12, '\0');
   }
-  return withExtraSection(withSectionReplaced(withSectionReplaced(full, "TETC", "TETS", tets), "CGR4", "CGR2",
+  return withExtraSection(withSectionReplaced(withSectionReplaced(full, "TETM", "TETS", tets), "CGR4", "CGR2",
                                               cellGridWithPlanes(level.cellGrid)),
                           "OUTC", 0, cells);
 }
@@ -628,7 +656,7 @@ TEST(LevelFile, ReadsOldTetsWithNeighboursAndOuterCells) {
   writeBytes(dir.file("both.tpb"), both, both.size());
   const LevelResult b = loadLevel(dir.file("both.tpb"), back);
   EXPECT_EQ(b.status, LevelStatus::kCorrupt);
-  EXPECT_NE(b.message.find("TETS and TETC"), std::string::npos) << b.message;
+  EXPECT_NE(b.message.find("more than one of the TETS, TETC and TETM"), std::string::npos) << b.message;
 }
 
 // saveLevel writes SH in half precision (SHRH, 56 bytes a probe); levels written before, with float SH
@@ -894,6 +922,45 @@ TEST(LevelFile, RejectsForgedGridNodeStreams) {
   writeBytes(dir.file("same.tpb"), section(n, stream), full.size());
   Level same;
   EXPECT_TRUE(loadLevel(dir.file("same.tpb"), same));
+}
+
+// A forged packed tet stream (TETM) with valid checksums is refused, naming the tet and what is wrong: a
+// list position not yet filled, a probe out of range or twice in one tet, an overlong varint, a stream cut
+// short or with bytes left over, fewer bytes than two a tet; and a file with two tet sections.
+TEST(LevelFile, RejectsForgedTetStreams) {
+  TempDir dir;
+  const Level level = smallLevel();
+  ASSERT_TRUE(saveLevel(dir.file("full.tpb"), level));
+  const std::vector<char> full = bytesOf(dir.file("full.tpb"));
+  const size_t at = sectionOffset(full, "TETM"), size = sectionSize(full, "TETM");
+  const std::string stream(full.begin() + long(at), full.begin() + long(at + size));
+  // Tet 0 as `head`, the rest of the section zeros (never read: the error comes first).
+  const auto first = [&](const std::string& head) {
+    std::string b = head;
+    b.resize(std::max(size, head.size()), '\0');
+    return withSectionReplaced(full, "TETM", "TETM", b);
+  };
+  const std::string given4 = "\xFF\xFF";  // four vertices given by varints
+  const uint64_t P = level.probes.size();
+  expectRefusedAsCorrupt(dir, first(std::string(2, '\0')), "tet 0: names recent probe 0 of 0");
+  expectRefusedAsCorrupt(dir, first(given4 + varint(zigzag(int64_t(P)))), "tet 0: vertex out of range");
+  expectRefusedAsCorrupt(dir, first(given4 + varint(zigzag(-1))), "tet 0: vertex out of range");
+  expectRefusedAsCorrupt(dir, first(std::string("\x0F\xFF", 2) + varint(0)), "tet 0: vertex 0 repeated");
+  expectRefusedAsCorrupt(dir, first(given4 + std::string(11, char(0xFF))), "tet 0: truncated or overlong");
+  expectRefusedAsCorrupt(dir, withSectionReplaced(full, "TETM", "TETM", stream + '\0'), "after the last tet");
+  expectRefusedAsCorrupt(dir, withSectionReplaced(full, "TETM", "TETM", stream.substr(0, stream.size() - 1)),
+                         "truncated");
+  expectRefusedAsCorrupt(
+      dir, withSectionReplaced(full, "TETM", "TETM", std::string(2 * level.tets.size() - 1, '\0')),
+      "need at least");
+  std::string records(8 * level.tets.size(), '\0');
+  expectRefusedAsCorrupt(dir, withExtraSection(full, "TETC", 1, records),
+                         "more than one of the TETS, TETC and TETM");
+  // The untouched stream through the same path still loads.
+  const std::vector<char> same = withSectionReplaced(full, "TETM", "TETM", stream);
+  writeBytes(dir.file("same.tpb"), same, same.size());
+  Level back;
+  EXPECT_TRUE(loadLevel(dir.file("same.tpb"), back));
 }
 
 // A section flagged as required that this reader does not know must not be ignored.

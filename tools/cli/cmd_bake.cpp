@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "file_sections.h"
 #include "pipeline.h"
 #include "shard_part.h"
 #include "tetraprobe/common/error.h"
@@ -308,8 +309,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const uint64_t fileBytes = std::filesystem::file_size(out);
   const uint64_t probeBytes = level.probes.size() * sizeof(glm::vec3);
   const uint64_t shBytes = level.sh.size() * sizeof(ShHalf);  // as stored (runtime/sh_half.h)
-  // As stored: four probe indices of 2-4 bytes each (level_format.md, TETC).
-  const uint64_t tetBytes = level.tets.size() * 4 * levelProbeIndexBytes(level.probes.size());
+  // As stored: the tets' probe indices, packed (level_format.md, TETM; TETC for a streamed level).
+  const uint64_t tetBytes = sectionBytes(fileSections(out), {"TETM", "TETC", "TETS"});
 
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
   std::printf("  scene   %zu triangles, %zu materials, %zu lights\n", scene.triangles.size(),

@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "file_sections.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/runtime/file_io.h"
@@ -14,32 +15,6 @@
 
 namespace tetraprobe::cli {
 namespace {
-
-struct FileSection {
-  std::string tag;
-  uint64_t bytes;
-};
-
-// The file's section table (docs/level_format.md: a u32 count at byte 72, 24-byte entries from byte 80: tag,
-// flags, offset, size, little-endian). Read only after loadLevel accepted the file, so the table is whole
-// and its checksum holds.
-std::vector<FileSection> fileSections(const std::string& path) {
-  std::vector<char> b;
-  std::string error;
-  if (!readFile(path, b, &error)) throw InputError(error);
-  const auto u = [&b](size_t at, int n) {
-    uint64_t v = 0;
-    for (int i = 0; i < n; ++i) v |= uint64_t(uint8_t(b[at + size_t(i)])) << (8 * i);
-    return v;
-  };
-  std::vector<FileSection> out;
-  const uint64_t count = u(72, 4);
-  for (uint64_t i = 0; i < count; ++i) {
-    const size_t e = 80 + 24 * size_t(i);
-    out.push_back({std::string(b.data() + e, 4), u(e + 16, 8)});
-  }
-  return out;
-}
 
 }  // namespace
 

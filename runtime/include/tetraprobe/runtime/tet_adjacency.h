@@ -1,5 +1,5 @@
 // Tet adjacency from vertex indices alone: what the level file no longer stores (docs/level_format.md,
-// `TETC`). Two tets are neighbours across a face when they name the same three probes; a face named by one
+// `TETM`, `TETC`). Two tets are neighbours across a face when they name the same three probes; a face named by one
 // tet is on the hull. Permissive: standard library only.
 #pragma once
 
