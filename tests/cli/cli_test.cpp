@@ -4,6 +4,7 @@
 // thread count, and light where the sample level's light is.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -135,6 +136,51 @@ void Cli::bakeBox() {
 }
 
 }  // namespace
+
+// The default spacing follows the scene's size: a box 2 m across (the 4 m test box halved, the size of the
+// Cornell box) would have every 1 m voxel touch a wall and place no probe. auto gives 8 voxels along its
+// largest extent (0.25 m) and a level; an explicit 1 m fails with exit 2, one line naming the spacing, the
+// scene's size and what auto would pick, and no output. A scene of 8 m or more keeps 1 m
+// (autoSpacing, tools/cli/pipeline.h).
+TEST_F(Cli, SmallSceneBakesAtAnAutomaticSpacing) {
+  std::string half;  // kBoxObj with every coordinate halved
+  std::istringstream in(kBoxObj);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream v(line.substr(2));
+      double x, y, z;
+      v >> x >> y >> z;
+      line = "v " + std::to_string(x / 2) + " " + std::to_string(y / 2) + " " + std::to_string(z / 2);
+    }
+    half += line + "\n";
+  }
+  write("small.obj", half.c_str());
+  write("box.mtl", kBoxMtl);
+  const std::string quick = " --samples 16 --noise 0 --probe-budget 0 --fill-holes 0 --threads 2";
+  const CliRun fixed = run("bake " + path("small.obj").string() + " --spacing 1" + quick + " -o " +
+                           path("fixed.tpb").string());
+  EXPECT_EQ(fixed.code, 2) << fixed.err;
+  EXPECT_EQ(std::count(fixed.err.begin(), fixed.err.end(), '\n'), 1) << fixed.err;
+  EXPECT_NE(fixed.err.find("at --spacing 1 m in a scene 2 m across"), std::string::npos) << fixed.err;
+  EXPECT_NE(fixed.err.find("auto picks 0.25 m"), std::string::npos) << fixed.err;
+  EXPECT_FALSE(fs::exists(path("fixed.tpb")));
+
+  const CliRun automatic = run("bake " + path("small.obj").string() + quick + " -o " +
+                               path("auto.tpb").string() + " --report " + path("auto.json").string());
+  ASSERT_EQ(automatic.code, 0) << automatic.err;
+  EXPECT_NE(automatic.out.find("spacing 0.25 m (auto"), std::string::npos) << automatic.out;
+  const auto j = nlohmann::json::parse(slurp(path("auto.json")));
+  EXPECT_EQ(j["options"]["spacing"].get<double>(), 0.25);
+  EXPECT_TRUE(j["options"]["spacing_auto"].get<bool>());
+  EXPECT_GE(j["probes"]["count"].get<size_t>(), 100u);
+
+  // The 4 m box: 0.5 m (4 m / 8); the bundled two-room sample (8.2 m): 1 m, as before auto existed.
+  write("box.obj", kBoxObj);
+  const CliRun box = run("bake " + path("box.obj").string() + quick + " -o " + path("box.tpb").string() +
+                         " --report " + path("box.json").string());
+  ASSERT_EQ(box.code, 0) << box.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(path("box.json")))["options"]["spacing"].get<double>(), 0.5);
+}
 
 // Every command answers --help with usage on stdout and exit 0.
 TEST_F(Cli, HelpExitsZeroForEveryCommand) {
@@ -920,7 +966,9 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
   const std::string level = path("box.tpb").string();
-  ASSERT_EQ(run("bake " + path("box.obj").string() + " --samples 16 --probe-budget 0 -o " + level).code, 0);
+  ASSERT_EQ(
+      run("bake " + path("box.obj").string() + " --spacing 1 --samples 16 --probe-budget 0 -o " + level).code,
+      0);
   const std::string view = " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24";
   const CliRun b =
       run("bench render " + path("box.obj").string() + " " + level + view + " --frames 2 --json");

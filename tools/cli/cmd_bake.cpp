@@ -23,8 +23,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       "SCENE is a .gltf/.glb, .obj or .scene.json file (docs/scene_format.md).",
       {{"--output", "-o", "LEVEL.tpb", "level file to write", ""},
        {"--report", "", "FILE.json", "also write a JSON report of the bake", ""},
-       {"--spacing", "", "METRES",
-        "finest probe spacing (voxel edge near geometry and in fine volumes; grid step)", "1"},
+       {"--spacing", "", "auto|METRES",
+        "finest probe spacing (voxel edge near geometry and in fine volumes; grid step); auto = 1 m, or for "
+        "a scene under 8 m across the largest power of two of a metre giving 8 voxels along its largest "
+        "extent",
+        "auto"},
        {"--probes", "", "FILE.csv",
         "user probes (x,y,z a line), kept exactly: alone they are the only probes; with --placement they are "
         "added to the automatic ones (automatic probes near them are dropped)",
@@ -117,8 +120,10 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const std::string out = args.str("--output");
 
   PipelineOptions opt;
-  opt.spacing = args.number("--spacing");
-  if (!(opt.spacing > 0.0)) throw UsageError("--spacing must be positive");
+  const bool spacingAuto = args.str("--spacing") == "auto";  // resolved from the scene once it is loaded
+  opt.spacing = spacingAuto ? 1.0 : parseNumber(args.str("--spacing"), "--spacing");
+  if (!(opt.spacing > 0.0) || !std::isfinite(opt.spacing))
+    throw UsageError("--spacing must be auto or a positive number of metres");
   opt.probesCsv = args.str("--probes");
   opt.placement =
       args.has("--placement") ? args.str("--placement") : (opt.probesCsv.empty() ? "voxel" : "none");
@@ -130,6 +135,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     throw UsageError("--placement grid does not take --probes (use voxel or none)");
   opt.maxSpacing = args.number("--max-spacing");
   if (!(opt.maxSpacing >= opt.spacing)) throw UsageError("--max-spacing must be at least --spacing");
+  // (auto resolves to at most 1 m, so the check holds for it too)
   opt.fillerSpacing = args.number("--filler-spacing");
   if (!(opt.fillerSpacing >= 0.0)) throw UsageError("--filler-spacing must be >= 0");
   const std::string shellSpacing = args.str("--shell-spacing");
@@ -266,6 +272,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (opt.shardRound == 2 && resume.sceneHash != sceneHash)
     throw InputError("scene " + scenePath + " differs from the one round 1 baked (content hash)");
 
+  if (spacingAuto) opt.spacing = autoSpacing(scene);
+
   PipelineStats stats;
   stats.timings.emplace_back("load", loadSeconds);
   Level level = buildLevel(scene, opt, stats);
@@ -313,8 +321,16 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   const uint64_t tetBytes = sectionBytes(fileSections(out), {"TETM", "TETC", "TETS"});
 
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
-  std::printf("  scene   %zu triangles, %zu materials, %zu lights\n", scene.triangles.size(),
-              scene.materials.size(), scene.lights.size());
+  glm::vec3 sceneLo, sceneHi;
+  sceneBounds(scene, sceneLo, sceneHi);
+  const glm::vec3 extent = sceneHi - sceneLo;
+  std::printf("  scene   %zu triangles, %zu materials, %zu lights; %.3g x %.3g x %.3g m\n",
+              scene.triangles.size(), scene.materials.size(), scene.lights.size(), extent.x, extent.y,
+              extent.z);
+  if (spacingAuto && opt.spacing < 1.0)
+    std::printf(
+        "  spacing %.4g m (auto: the scene is under %.0f m across; %.0f voxels along its largest extent)\n",
+        opt.spacing, kAutoSpacingVoxels, kAutoSpacingVoxels);
   if (stats.importedProbes)
     std::printf("  probes  %zu (imported with their SH, from %s)\n", level.probes.size(),
                 opt.importShCsv.c_str());
@@ -405,9 +421,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                   {"triangles", scene.triangles.size()},
                   {"materials", scene.materials.size()},
                   {"lights", scene.lights.size()},
+                  {"bounds", {{sceneLo.x, sceneLo.y, sceneLo.z}, {sceneHi.x, sceneHi.y, sceneHi.z}}},
                   {"warnings", scene.warnings}};
     j["level"] = out;
     j["options"] = {{"spacing", opt.spacing},
+                    {"spacing_auto", spacingAuto},
                     {"bounces", opt.bake.bounces},
                     {"samples", opt.bake.samplesPerProbe},
                     {"target_error", opt.bake.targetRelError},

@@ -95,6 +95,16 @@ ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
 
 }  // namespace
 
+double autoSpacing(const Scene& scene) {
+  glm::vec3 lo, hi;
+  sceneBounds(scene, lo, hi);
+  const double extent = std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z});
+  double spacing = 1.0;
+  if (!(extent > 0.0) || !std::isfinite(extent)) return spacing;  // no triangles: placement refuses the scene
+  while (extent < kAutoSpacingVoxels * spacing && spacing > 1.0 / 1024.0) spacing *= 0.5;
+  return spacing;
+}
+
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats) {
   StageTimer timer(stats);
   SceneTracer tracer(scene);
@@ -140,9 +150,17 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     stats.pushedProbes = push.pushed;
     stats.mergedProbes = mergeProbes(placed, 0.1);
     timer.mark("place");
-    if (placed.size() < 4)
-      throw InputError("only " + std::to_string(placed.size()) +
-                       " probe(s) left after voxel placement (need at least 4 that are not all coplanar)");
+    if (placed.size() < 4) {
+      glm::vec3 lo, hi;
+      sceneBounds(scene, lo, hi);
+      std::ostringstream msg;
+      msg << "only " << placed.size()
+          << " probe(s) left after voxel placement (need at least 4 that are not all coplanar) at --spacing "
+          << options.spacing << " m in a scene " << std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z})
+          << " m across (voxels touching geometry hold no probe): try a smaller --spacing (auto picks "
+          << autoSpacing(scene) << " m here)";
+      throw InputError(msg.str());
+    }
     const double shellStep = options.shellSpacing < 0.0 ? options.spacing : options.shellSpacing;
     if (shellStep > 0.0) {
       // Around the scene and every probe, so the shell is at least half a step from all of them.

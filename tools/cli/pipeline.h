@@ -98,6 +98,13 @@ struct PipelineStats {
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };
 
+// The default finest probe spacing for `scene` (bake --spacing auto): 1 m, the scale of gameplay space, or
+// for a scene whose bounds' largest extent is under 8 m the largest power of two of a metre with at least 8
+// voxels along that extent (0.5, 0.25, ...; at least 1/1024 m): 1 m voxels in a 2-unit Cornell box would all
+// touch geometry and place no probe. Every shared level and the bundled sample are 8 m or more (1 m).
+inline constexpr double kAutoSpacingVoxels = 8.0;
+double autoSpacing(const Scene& scene);
+
 // Runs every stage on a loaded scene. Throws InputError when the input cannot give a level (e.g. fewer than
 // four probes survive placement).
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats);
