@@ -19,6 +19,7 @@ bool encodeBspNodes(const std::vector<BspNode>& nodes, const std::vector<uint32_
   s.reserve(3 * nodes.size());
   std::vector<std::pair<size_t, int>> pending;  // (node, child) whose node child comes next in preorder
   int64_t previous = 0;
+  std::string leaves;  // the node's explicit leaves, written after its head varint
   for (size_t n = 0; n < nodes.size(); ++n) {
     if (!pending.empty()) {
       const auto [parent, c] = pending.back();
@@ -29,7 +30,7 @@ bool encodeBspNodes(const std::vector<BspNode>& nodes, const std::vector<uint32_
     const int f = int(faces[n] & 3u);
     if (size_t(t) >= tets.size()) return false;
     uint32_t codes[2];
-    std::string leaves;
+    leaves.clear();
     for (int c = 0; c < 2; ++c) {
       const int32_t child = nodes[n].child[c];
       if (child >= 0) {

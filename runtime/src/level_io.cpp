@@ -217,9 +217,14 @@ bool finite3(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-}  // namespace
-
-namespace {
+// What is wrong with probe i's local position (non-finite, or beyond kMaxLocalCoordinate), or "".
+std::string positionError(const glm::vec3& p, size_t i) {
+  if (!finite3(p)) return "probe " + std::to_string(i) + ": non-finite position";
+  if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxLocalCoordinate)
+    return "probe " + std::to_string(i) + ": position beyond " +
+           std::to_string(int64_t(kMaxLocalCoordinate)) + " m of the level origin";
+  return {};
+}
 
 // validateLevel; `linked`: the tets' neighbours were derived by linkTetNeighbours from vertices already
 // checked (in range, pairwise distinct), so they are consistent by construction (the other tet naming the
@@ -246,10 +251,7 @@ LevelResult validateLevelChecks(const Level& level, bool linked) {
   const int64_t probeCount = int64_t(level.probes.size()), tetCount = int64_t(level.tets.size());
   for (int64_t p = 0; p < probeCount; ++p) {
     const glm::vec3& pos = level.probes[size_t(p)];
-    if (!finite3(pos)) return corrupt("probe " + std::to_string(p) + ": non-finite position");
-    if (std::max({std::abs(pos.x), std::abs(pos.y), std::abs(pos.z)}) > kMaxLocalCoordinate)
-      return corrupt("probe " + std::to_string(p) + ": position beyond " +
-                     std::to_string(int64_t(kMaxLocalCoordinate)) + " m of the level origin");
+    if (std::string e = positionError(pos, size_t(p)); !e.empty()) return corrupt(std::move(e));
     const ShRgb& sh = level.sh[size_t(p)];
     for (int i = 0; i < kShCoeffCount; ++i) {
       if (!finite3(sh.c[size_t(i)]))
@@ -492,16 +494,13 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
 
   if (!level.cellGrid.slots.empty()) {
     const CellGrid& g = level.cellGrid;
-    // Packed (CGR4) when every plane is a tet face's and the trees are in preorder; the leaf codes refer to
-    // the neighbours the loader derives, so they are derived here too (none if the tets do not link).
+    // Packed (CGR4) when every plane is a tet face's and the trees are in preorder. Its leaf codes refer to
+    // the neighbours the loader derives (linkTetNeighbours); validateLevel above proved each stored
+    // neighbour is the other tet on the same three probes, which is what the loader derives (a stored -1
+    // only leaves a leaf code unused).
     std::string packedNodes;
     std::vector<uint32_t> faces;
-    if (nodeFaces(level, faces)) {
-      std::vector<Tet> linked = level.tets;
-      if (!linkTetNeighbours(linked, level.probes.size()).empty())
-        for (Tet& t : linked) std::fill(t.n, t.n + 4, -1);
-      runtime_detail::encodeBspNodes(g.nodes, faces, linked, packedNodes);
-    }
+    if (nodeFaces(level, faces)) runtime_detail::encodeBspNodes(g.nodes, faces, level.tets, packedNodes);
     const bool packed = !packedNodes.empty() || g.nodes.empty();
     sections.push_back({packed ? kTagCellGridPacked : kTagCellGrid, 0, {}});
     Writer& s = sections.back().bytes;
@@ -797,14 +796,9 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
     p.x = body.f32();
     p.y = body.f32();
     p.z = body.f32();
-    // Checked here as validateLevel would: the grid's planes are computed from positions before it runs,
+    // Checked here as validateLevel does: the grid's planes are computed from positions before it runs,
     // and a NaN would be reported as a flat face instead of as what it is.
-    if (!finite3(p))
-      return fail(LevelStatus::kCorrupt, name + "probe " + std::to_string(i) + ": non-finite position");
-    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxLocalCoordinate)
-      return fail(LevelStatus::kCorrupt, name + "probe " + std::to_string(i) + ": position beyond " +
-                                             std::to_string(int64_t(kMaxLocalCoordinate)) +
-                                             " m of the level origin");
+    if (std::string e = positionError(p, i); !e.empty()) return fail(LevelStatus::kCorrupt, name + e);
   }
   level.sh.resize(size_t(probeCount));
   if (shHalf.present) {

@@ -8,7 +8,7 @@
 namespace tetraprobe::runtime_detail {
 namespace {
 
-constexpr int kListSize = 15;   // nibbles 0..14 name a list position
+constexpr int kListSize = 15;    // nibbles 0..14 name a list position
 constexpr uint32_t kGiven = 15;  // the nibble of a vertex given by a varint
 
 // The move-to-front list of the probes last named, most recent first.
@@ -64,7 +64,8 @@ void encodeTetProbes(const std::vector<Tet>& tets, std::string& out) {
 std::string decodeTetProbes(const uint8_t* p, size_t size, size_t tetCount, size_t probeCount,
                             std::vector<Tet>& tets) {
   if (tetCount > size / 2)
-    return std::to_string(tetCount) + " tets in " + std::to_string(size) + " bytes (a tet takes at least two)";
+    return std::to_string(tetCount) + " tets in " + std::to_string(size) +
+           " bytes (a tet takes at least two)";
   tets.assign(tetCount, Tet{});
   RecentProbes recent;
   int64_t lastGiven = 0;

@@ -9,8 +9,12 @@
 namespace tetraprobe::runtime_detail {
 
 // zigzag(d) = 2d for d >= 0, -2d - 1 below: small magnitudes of either sign give small codes.
-inline uint64_t zigzag(int64_t v) { return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1u : uint64_t(v) << 1; }
-inline int64_t unzigzag(uint64_t z) { return (z & 1u) ? -int64_t(z >> 1) - 1 : int64_t(z >> 1); }
+inline uint64_t zigzag(int64_t v) {
+  return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1u : uint64_t(v) << 1;
+}
+inline int64_t unzigzag(uint64_t z) {
+  return (z & 1u) ? -int64_t(z >> 1) - 1 : int64_t(z >> 1);
+}
 
 // Unsigned LEB128: 7 bits a byte, low first, the high bit set on every byte but the last.
 inline void putVarint(std::string& out, uint64_t v) {

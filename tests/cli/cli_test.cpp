@@ -483,34 +483,25 @@ TEST_F(Cli, StreamedSectorWithZeroOcclusionPlaneIsCorrupt) {
   EXPECT_GE(refused, 1u);
   EXPECT_GE(loaded, 1u);
 
-  // The bake wrote packed occlusion (OCC2); `stream` rewrote it as fixed records (OCCL), which `load` seeks.
-  // A streamed file holding OCC2 is refused at `open`, naming it.
+  // The bake packed occlusion (OCC2) and tets (TETM); `stream` rewrote them as fixed records (OCCL, TETC),
+  // which `load` seeks. A streamed file holding a packed section is refused at `open`, naming it.
   const std::string baked = slurp(path("full.tpb"));
-  EXPECT_NE(tetraprobe::test::section(tetraprobe::test::Bytes(baked.begin(), baked.end()), "OCC2"), 0u);
-  tetraprobe::test::Bytes p(streamed.begin(), streamed.end());
-  for (uint32_t i = 0; i < tetraprobe::test::getU32(p, 72); ++i)
-    if (std::memcmp(&p[80 + 24 * i], "OCCL", 4) == 0) std::memcpy(&p[80 + 24 * i], "OCC2", 4);
-  tetraprobe::test::fixChecksums(p);
-  std::ofstream(path("packed.tpb"), std::ios::binary)
-      .write(reinterpret_cast<const char*>(p.data()), std::streamsize(p.size()));
-  tetraprobe::StreamingLevel packed;
-  const tetraprobe::LevelResult r = packed.open(path("packed.tpb").string());
-  EXPECT_EQ(r.status, tetraprobe::LevelStatus::kCorrupt);
-  EXPECT_NE(r.message.find("OCC2"), std::string::npos) << r.message;
-
-  // Likewise the tets: the bake packed them (TETM), `stream` wrote fixed records (TETC), and a streamed file
-  // holding TETM is refused at `open`, naming it.
-  EXPECT_NE(tetraprobe::test::section(tetraprobe::test::Bytes(baked.begin(), baked.end()), "TETM"), 0u);
-  tetraprobe::test::Bytes t(streamed.begin(), streamed.end());
-  for (uint32_t i = 0; i < tetraprobe::test::getU32(t, 72); ++i)
-    if (std::memcmp(&t[80 + 24 * i], "TETC", 4) == 0) std::memcpy(&t[80 + 24 * i], "TETM", 4);
-  tetraprobe::test::fixChecksums(t);
-  std::ofstream(path("packed_tets.tpb"), std::ios::binary)
-      .write(reinterpret_cast<const char*>(t.data()), std::streamsize(t.size()));
-  tetraprobe::StreamingLevel packedTets;
-  const tetraprobe::LevelResult rt = packedTets.open(path("packed_tets.tpb").string());
-  EXPECT_EQ(rt.status, tetraprobe::LevelStatus::kCorrupt);
-  EXPECT_NE(rt.message.find("TETM"), std::string::npos) << rt.message;
+  const auto refusedWhenPacked = [&](const char* fixed, const char* packed) {
+    EXPECT_NE(tetraprobe::test::section(tetraprobe::test::Bytes(baked.begin(), baked.end()), packed), 0u);
+    tetraprobe::test::Bytes p(streamed.begin(), streamed.end());
+    for (uint32_t i = 0; i < tetraprobe::test::getU32(p, 72); ++i)
+      if (std::memcmp(&p[80 + 24 * i], fixed, 4) == 0) std::memcpy(&p[80 + 24 * i], packed, 4);
+    tetraprobe::test::fixChecksums(p);
+    const fs::path file = path(std::string("packed_") + packed + ".tpb");
+    std::ofstream(file, std::ios::binary)
+        .write(reinterpret_cast<const char*>(p.data()), std::streamsize(p.size()));
+    tetraprobe::StreamingLevel level;
+    const tetraprobe::LevelResult r = level.open(file.string());
+    EXPECT_EQ(r.status, tetraprobe::LevelStatus::kCorrupt) << packed;
+    EXPECT_NE(r.message.find(packed), std::string::npos) << r.message;
+  };
+  refusedWhenPacked("OCCL", "OCC2");
+  refusedWhenPacked("TETC", "TETM");
 }
 
 // The same input and options give a bit-identical level whatever the thread count, and the report has the

@@ -104,22 +104,20 @@ uint32_t tagOf(const char* s) {
          uint32_t(uint8_t(s[3])) << 24;
 }
 
-// Offset of the section tagged `tag` (docs/level_format.md: the table follows the 80-byte header).
-size_t sectionOffset(const std::vector<char>& b, const char* tag) {
+// Field `at` (8: offset, 16: size) of the table entry of the section tagged `tag` (docs/level_format.md: the
+// table of 24-byte entries follows the 80-byte header).
+size_t sectionField(const std::vector<char>& b, const char* tag, size_t at) {
   const uint32_t n = getU32(b, 72);
   for (uint32_t i = 0; i < n; ++i)
-    if (getU32(b, 80 + 24 * i) == tagOf(tag)) return size_t(getU64(b, 80 + 24 * i + 8));
+    if (getU32(b, 80 + 24 * i) == tagOf(tag)) return size_t(getU64(b, 80 + 24 * i + at));
   ADD_FAILURE() << "no section " << tag;
   return 0;
 }
-
-// Size in bytes of the section tagged `tag`.
+size_t sectionOffset(const std::vector<char>& b, const char* tag) {
+  return sectionField(b, tag, 8);
+}
 size_t sectionSize(const std::vector<char>& b, const char* tag) {
-  const uint32_t n = getU32(b, 72);
-  for (uint32_t i = 0; i < n; ++i)
-    if (getU32(b, 80 + 24 * i) == tagOf(tag)) return size_t(getU64(b, 80 + 24 * i + 16));
-  ADD_FAILURE() << "no section " << tag;
-  return 0;
+  return sectionField(b, tag, 16);
 }
 
 // `bytes`, written and loaded, is refused as kCorrupt with a message holding `needle`, and nothing is loaded.

@@ -14,9 +14,7 @@
 #include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe::cli {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 int cmdInspect(int argc, char** argv) {
   Args args("tetraprobe inspect LEVEL.tpb [--json]", "Prints the contents of a level file.",

@@ -2,28 +2,28 @@
 #include "file_sections.h"
 
 #include <algorithm>
+#include <fstream>
 
 #include "tetraprobe/common/error.h"
-#include "tetraprobe/runtime/file_io.h"
 
 namespace tetraprobe::cli {
 
 std::vector<FileSection> fileSections(const std::string& path) {
-  std::vector<char> b;
-  std::string error;
-  if (!readFile(path, b, &error)) throw InputError(error);
-  const auto u = [&b](size_t at, int n) {
+  // Only the header and the table are read (80 + 24 bytes a section), not the level.
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open");
+  const auto u = [](const char* b, int n) {
     uint64_t v = 0;
-    for (int i = 0; i < n; ++i) v |= uint64_t(uint8_t(b[at + size_t(i)])) << (8 * i);
+    for (int i = 0; i < n; ++i) v |= uint64_t(uint8_t(b[i])) << (8 * i);
     return v;
   };
+  char header[80];
   std::vector<FileSection> out;
-  if (b.size() < 80) return out;
-  const uint64_t count = u(72, 4);
-  for (uint64_t i = 0; i < count && 80 + 24 * (i + 1) <= b.size(); ++i) {
-    const size_t e = 80 + 24 * size_t(i);
-    out.push_back({std::string(b.data() + e, 4), u(e + 16, 8)});
-  }
+  if (!in.read(header, sizeof header)) return out;
+  const uint64_t count = u(header + 72, 4);
+  char entry[24];
+  for (uint64_t i = 0; i < count && in.read(entry, sizeof entry); ++i)
+    out.push_back({std::string(entry, 4), u(entry + 16, 8)});
   return out;
 }
 
