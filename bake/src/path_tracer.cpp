@@ -90,30 +90,39 @@ glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, cons
   return e;
 }
 
-glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
-                             Rng& rng) {
+bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng, EmitterSample& out) {
   const SceneTracer::Impl& impl = tracer.impl();
-  if (impl.emissive.empty()) return glm::vec3(0.0f);
+  if (impl.emissive.empty()) return false;
   const double uLight = rng.uniformDouble();
   const float u1 = rng.uniform(), u2 = rng.uniform();
   const uint32_t tri = impl.emissive[sampleCdf(impl.emissiveCdf, uLight)];
   const glm::vec2 b = uniformTriangle(u1, u2);
-  if (tracer.isHole(tri, b.x, b.y)) return glm::vec3(0.0f);  // no emitter there (BSDF rays miss it too)
-  const glm::vec3 p = impl.pointOn(tri, b.x, b.y);
-  const glm::vec3 d = p - origin;
+  if (tracer.isHole(tri, b.x, b.y)) return false;  // no emitter there (BSDF rays miss it too)
+  const glm::vec3 d = impl.pointOn(tri, b.x, b.y) - origin;
   const float dist2 = glm::dot(d, d);
-  if (!(dist2 > 0.0f)) return glm::vec3(0.0f);
+  if (!(dist2 > 0.0f)) return false;
   const float dist = std::sqrt(dist2);
   const glm::vec3 w = d / dist;
-  const float cosReceiver = glm::dot(n, w);
   const float cosLight = -glm::dot(impl.normals[tri], w);
-  if (cosReceiver <= 0.0f || cosLight <= 0.0f) return glm::vec3(0.0f);  // emission is front-face only
-  const float pdfLight = impl.emissivePdfArea[tri] * dist2 / cosLight;
+  if (cosLight <= 0.0f) return false;  // emission is front-face only
+  out.dir = w;
+  out.dist = dist;
+  out.pdf = impl.emissivePdfArea[tri] * dist2 / cosLight;
+  out.radiance = impl.material(tri).emission;
+  return true;
+}
+
+glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
+                             Rng& rng) {
+  EmitterSample s;
+  if (!sampleEmitter(tracer, origin, rng, s)) return glm::vec3(0.0f);
+  const float cosReceiver = glm::dot(n, s.dir);
+  if (cosReceiver <= 0.0f) return glm::vec3(0.0f);
   const float eps = tracer.rayEpsilon();
-  const float through = dist > eps ? tracer.transmittance(origin, w, 0.0f, dist - eps) : 1.0f;
+  const float through = s.dist > eps ? tracer.transmittance(origin, s.dir, 0.0f, s.dist - eps) : 1.0f;
   if (through <= 0.0f) return glm::vec3(0.0f);
-  const float weight = powerHeuristic(pdfLight, cosReceiver * kInvPi);
-  const glm::vec3 e = impl.material(tri).emission * (cosReceiver * weight / pdfLight);
+  const float weight = powerHeuristic(s.pdf, cosReceiver * kInvPi);
+  const glm::vec3 e = s.radiance * (cosReceiver * weight / s.pdf);
   return through < 1.0f ? e * through : e;
 }
 

@@ -23,13 +23,26 @@ struct TraceSettings {
 };
 
 // Radiance in W/(m^2 sr) arriving at `origin` from unit direction `dir` (the ray starts at origin, tnear 0).
-// `prevPdf` > 0: `dir` was drawn from a cosine lobe with this solid-angle pdf at a point that also sampled
-// the emissive triangles (emissiveIrradiance), so emission met by this ray is MIS-weighted against that;
-// 0: no light sampling was done at origin and emission counts fully. At a transmissive surface the path
+// `prevPdf` > 0: `dir` was drawn with this solid-angle pdf (a cosine lobe, or a probe's uniform sphere) at a
+// point that also sampled the emissive triangles as often (emissiveIrradiance, sampleEmitter), so emission
+// met by this ray is MIS-weighted against that; 0: no light sampling was done at origin and emission counts fully. At a transmissive surface the path
 // continues straight on with probability `transmission` (the path's rng; no bounce counted), else
 // reflects diffusely with the albedo; opaque surfaces draw no extra random number.
 glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
                            float prevPdf, const TraceSettings& settings, Rng& rng);
+
+// A point drawn on the emissive triangles by power (area-uniform within a triangle), seen from `origin`.
+struct EmitterSample {
+  glm::vec3 dir{0.0f};  // unit direction from origin to the point
+  float dist = 0.0f;    // distance from origin to the point
+  float pdf = 0.0f;     // solid-angle pdf of drawing dir (power share / area * dist^2 / cos at the light)
+  glm::vec3 radiance{0.0f};  // the emission leaving the point towards origin (not shadow-tested)
+};
+
+// Draws one EmitterSample (three random numbers whatever the outcome). False when the scene has no
+// emissive triangles, the point lies in an alpha-cutout hole, coincides with origin, or faces away from it
+// (emission is front-face only): such a draw contributes 0, as a BSDF or sphere ray would find no emission.
+bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng, EmitterSample& out);
 
 // One-sample estimate of the irradiance (W/m^2) at `origin` (already offset from its surface) with unit
 // normal n from emissive triangles, sampled by power and MIS-weighted (power heuristic) against cosine

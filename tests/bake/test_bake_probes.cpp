@@ -1,4 +1,5 @@
 // bakeProbes: furnace radiance, content flags, analytic punctual deltas and thread-count determinism.
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -206,6 +207,69 @@ TEST(DirectPunctual, ProbeHoldsExactDeltaProjection) {
   for (int i = 0; i < kShCoeffCount; ++i) EXPECT_EQ(shadowed[0].c[i], glm::vec3(0.0f));
 }
 
+// A small emitter seen directly from a probe (a 0.1 m square 2 m away: 2e-4 of the sphere, so 64 sphere
+// directions almost never meet it) holds its exact projection at every probe, because the bake also draws
+// points on the emitters (MIS-weighted against the directions). The truth is a 128 x 128 midpoint quadrature
+// of Le Y(w) cos / r^2 over the square (relative error ~1e-5). A probe behind an opaque blocker gets exactly
+// 0, and so does every probe once the emitter faces away (emission is front-face only). Tolerance per probe
+// and coefficient: 3 % of (|coefficient| + L00) (band 2 varies by tens of % across the square seen from 2 m:
+// up to 2 % over 64 points), for the set bake and the adaptive one; the directions alone give 0 for most probes and
+// ~80x too much for the rest.
+TEST(EmitterSampling, SmallEmitterSeenDirectlyIsExactAtEveryProbe) {
+  Scene s;
+  const glm::vec3 le(40.0f, 30.0f, 20.0f);
+  const uint32_t lamp = test::addMaterial(s, glm::vec3(0.0f), le);
+  const uint32_t black = test::addMaterial(s, glm::vec3(0.0f));
+  const float h = 0.05f;  // half side; the square faces -z at z = 2
+  test::addQuad(s, {-h, -h, 2}, {-h, h, 2}, {h, h, 2}, {h, -h, 2}, lamp);
+  test::addQuad(s, {-9, -2, -2}, {-9, 2, -2}, {-4, 2, -2}, {-4, -2, -2}, black);  // a blocker
+  SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes;
+  for (int i = 0; i < 12; ++i)
+    probes.emplace_back(0.3 * std::sin(i * 1.7), 0.3 * std::cos(i * 1.1), 0.05 * i);
+  probes.emplace_back(-7.0, 0.0, -3.0);  // under the blocker: the lamp at z = 2 is hidden
+  auto exact = [&](const glm::dvec3& p) {
+    std::array<double, kShCoeffCount> sum{};
+    const int n = 128;
+    const double cell = 2.0 * h / n;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const glm::dvec3 q(-h + (i + 0.5) * cell, -h + (j + 0.5) * cell, 2.0);
+        const glm::dvec3 d = q - p;
+        const double r2 = glm::dot(d, d), r = std::sqrt(r2);
+        const glm::dvec3 w = d / r;
+        const double solid = cell * cell * w.z / r2;  // the square's normal is -z, w.z = cos at the light
+        const auto y = shBasis<double>(w.x, w.y, w.z);
+        for (int k = 0; k < kShCoeffCount; ++k) sum[size_t(k)] += solid * y[size_t(k)];
+      }
+    return sum;
+  };
+  for (double target : {0.0, 0.02}) {
+    BakeOptions o = quiet(0, 64, kContentEmissive);
+    o.targetRelError = target;
+    o.maxSamplesPerProbe = 4096;
+    const std::vector<ShRgb> sh = bakeProbes(tracer, probes, o);
+    for (size_t p = 0; p + 1 < probes.size(); ++p) {
+      const auto truth = exact(probes[p]);
+      for (int k = 0; k < kShCoeffCount; ++k)
+        for (int ch = 0; ch < 3; ++ch)
+          EXPECT_NEAR(sh[p].c[k][ch], le[ch] * truth[size_t(k)],
+                      0.03 * le[ch] * (std::fabs(truth[size_t(k)]) + truth[0]))
+              << "probe " << p << " coefficient " << k << " channel " << ch << " target " << target;
+    }
+    for (int k = 0; k < kShCoeffCount; ++k)
+      EXPECT_EQ(sh.back().c[k], glm::vec3(0.0f)) << "behind the blocker";
+  }
+  // Turned to face away from the probes, the same emitter gives them nothing by either strategy.
+  Scene away;
+  test::addQuad(away, {-h, -h, 2}, {h, -h, 2}, {h, h, 2}, {-h, h, 2},
+                test::addMaterial(away, glm::vec3(0.0f), le));
+  SceneTracer awayTracer(away);
+  const std::vector<ShRgb> none = bakeProbes(awayTracer, probes, quiet(0, 64, kContentEmissive));
+  for (const ShRgb& p : none)
+    for (int k = 0; k < kShCoeffCount; ++k) EXPECT_EQ(p.c[k], glm::vec3(0.0f)) << "back-facing emitter";
+}
+
 // --sh-order 1: coefficients 4..8 are exactly zero and 0..3 are the L2 bake's, bit for bit (the same random
 // streams; the truncation happens after projection).
 TEST(ShOrder, L1BakeIsTheL2BakeWithoutBandTwo) {
@@ -338,11 +402,11 @@ TEST(AdaptiveSampling, PathBudgetConvergesProbesStoppedAtTheCap) {
   std::vector<glm::dvec3> probes;
   for (int i = 0; i < 8; ++i) probes.emplace_back(0.3 * std::sin(i * 1.3), 0.3 * std::cos(i * 0.7), 0.0);
   BakeOptions capped = quiet(kUnboundedBounces, 128, kContentAll);
-  capped.targetRelError = 0.01;
+  capped.targetRelError = 0.0125;
   capped.maxSamplesPerProbe = 256;
   BakeStats cappedStats;
   bakeProbes(tracer, probes, capped, &cappedStats);
-  ASSERT_EQ(cappedStats.probesAtCap, probes.size()) << "the cap alone must stop every probe above 1 %";
+  ASSERT_EQ(cappedStats.probesAtCap, probes.size()) << "the cap alone must stop every probe above 1.25 %";
   EXPECT_EQ(cappedStats.budgetPaths, 0u);
 
   BakeOptions budget = capped;
@@ -350,7 +414,7 @@ TEST(AdaptiveSampling, PathBudgetConvergesProbesStoppedAtTheCap) {
   BakeStats stats;
   const std::vector<ShRgb> sh = bakeProbes(tracer, probes, budget, &stats);
   EXPECT_EQ(stats.probesAtCap, 0u) << "max achieved " << stats.maxRelError;
-  EXPECT_LE(stats.maxRelError, 0.01);
+  EXPECT_LE(stats.maxRelError, 0.0125);
   EXPECT_GT(stats.budgetPaths, 0u);
   EXPECT_LE(stats.paths, budget.pathBudget + probes.size() * kBakeBatchSize);
   EXPECT_LE(stats.maxPathsPerProbe, kBakeBudgetCapFactor * capped.maxSamplesPerProbe);

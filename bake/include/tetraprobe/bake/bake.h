@@ -73,6 +73,9 @@ struct BakeStats {
 // against the level-wide floor, so the result does not depend on the order probes are baked in).
 // Per probe: options.samplesPerProbe directions (bakeSphereDirections keyed by the seed and the probe index),
 // incident radiance L(d) by path tracing (options.bounces, options.content), projected with projectToSh.
+// With kContentEmissive in a scene with emissive triangles, as many points drawn on the emitters by power
+// join the directions, both MIS-weighted (power heuristic): emitters seen directly from a probe come in with
+// far less noise than through the directions alone, and the estimate stays unbiased.
 // With kContentDirectPunctual, each unshadowed point/spot light adds (I spot / r^2) Y(d) and each unshadowed
 // sun E Y(d) (d towards the light, or the sun disc's centre) analytically: the delta's exact projection,
 // times the transmittance of the shadow ray (SceneTracer::transmittance: glass in between scales it).
