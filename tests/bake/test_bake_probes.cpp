@@ -260,6 +260,23 @@ TEST(EmitterSampling, SmallEmitterSeenDirectlyIsExactAtEveryProbe) {
     for (int k = 0; k < kShCoeffCount; ++k)
       EXPECT_EQ(sh.back().c[k], glm::vec3(0.0f)) << "behind the blocker";
   }
+  // Behind a pane that passes 40 % (thin glass, black otherwise), every probe holds 40 % of the projection:
+  // both strategies cross the pane (directions by a random pass, emitter points by the shadow ray's
+  // transmittance) and their MIS weights still add up to one. Tolerance: 3 % as above, plus 4 % of L00 for
+  // the sphere rays' random passes.
+  Scene glass = s;
+  const uint32_t pane = test::addMaterial(glass, glm::vec3(0.0f));
+  glass.materials[pane].transmission = 0.4f;
+  test::addQuad(glass, {-1, -1, 1.5f}, {1, -1, 1.5f}, {1, 1, 1.5f}, {-1, 1, 1.5f}, pane);
+  SceneTracer glassTracer(glass);
+  const std::vector<ShRgb> dimmed = bakeProbes(glassTracer, probes, quiet(0, 256, kContentEmissive));
+  for (size_t p = 0; p + 1 < probes.size(); ++p) {
+    const auto truth = exact(probes[p]);
+    for (int k = 0; k < kShCoeffCount; ++k)
+      EXPECT_NEAR(dimmed[p].c[k][0], 0.4 * le[0] * truth[size_t(k)],
+                  0.4 * le[0] * (0.03 * std::fabs(truth[size_t(k)]) + 0.07 * truth[0]))
+          << "behind glass: probe " << p << " coefficient " << k;
+  }
   // Turned to face away from the probes, the same emitter gives them nothing by either strategy.
   Scene away;
   test::addQuad(away, {-h, -h, 2}, {h, -h, 2}, {h, h, 2}, {-h, h, 2},
