@@ -97,12 +97,11 @@ bool samplesEmitters(const SceneTracer& tracer, const BakeOptions& options) {
 // (4 pi p)): the caller's 4 pi / count scale then gives their share of the projection.
 void addEmitterSamples(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
                        const BakeOptions& options, uint64_t first, int count, double acc[kShCoeffCount][3]) {
-  const float eps = tracer.rayEpsilon();
   for (int k = 0; k < count; ++k) {
     Rng rng(streamKey(options.seed, index, kEmitterSampleTag | (first + uint64_t(k))));
     EmitterSample e;
     if (!sampleEmitter(tracer, probe, rng, e)) continue;
-    const float through = e.dist > eps ? tracer.transmittance(probe, e.dir, 0.0f, e.dist - eps) : 1.0f;
+    const float through = emitterTransmittance(tracer, probe, e);
     if (through <= 0.0f) continue;
     const double weight =
         double(through) * powerHeuristic(e.pdf, kSpherePdf) / (double(e.pdf) * 4.0 * std::numbers::pi);

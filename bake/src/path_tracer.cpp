@@ -112,14 +112,18 @@ bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng,
   return true;
 }
 
+float emitterTransmittance(const SceneTracer& tracer, const glm::vec3& origin, const EmitterSample& s) {
+  const float eps = tracer.rayEpsilon();
+  return s.dist > eps ? tracer.transmittance(origin, s.dir, 0.0f, s.dist - eps) : 1.0f;
+}
+
 glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n,
                              Rng& rng) {
   EmitterSample s;
   if (!sampleEmitter(tracer, origin, rng, s)) return glm::vec3(0.0f);
   const float cosReceiver = glm::dot(n, s.dir);
   if (cosReceiver <= 0.0f) return glm::vec3(0.0f);
-  const float eps = tracer.rayEpsilon();
-  const float through = s.dist > eps ? tracer.transmittance(origin, s.dir, 0.0f, s.dist - eps) : 1.0f;
+  const float through = emitterTransmittance(tracer, origin, s);
   if (through <= 0.0f) return glm::vec3(0.0f);
   const float weight = powerHeuristic(s.pdf, cosReceiver * kInvPi);
   const glm::vec3 e = s.radiance * (cosReceiver * weight / s.pdf);

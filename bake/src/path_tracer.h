@@ -44,6 +44,10 @@ struct EmitterSample {
 // (emission is front-face only): such a draw contributes 0, as a BSDF or sphere ray would find no emission.
 bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng, EmitterSample& out);
 
+// The transmittance of the segment from `origin` to sample `s`'s point (stopping a ray epsilon short of it;
+// 1 when it is closer than that): 0 when an opaque surface blocks it.
+float emitterTransmittance(const SceneTracer& tracer, const glm::vec3& origin, const EmitterSample& s);
+
 // One-sample estimate of the irradiance (W/m^2) at `origin` (already offset from its surface) with unit
 // normal n from emissive triangles, sampled by power and MIS-weighted (power heuristic) against cosine
 // sampling of the hemisphere about n. Shadow-tested: weighted by the segment's transmittance. Points that

@@ -14,8 +14,6 @@
 #include "tetraprobe/runtime/shader_variant.h"
 
 namespace tetraprobe::cli {
-namespace {}  // namespace
-
 int cmdInspect(int argc, char** argv) {
   Args args("tetraprobe inspect LEVEL.tpb [--json]", "Prints the contents of a level file.",
             {{"--json", "", "", "print JSON instead of text", ""}});

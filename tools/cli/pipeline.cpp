@@ -95,10 +95,14 @@ ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
 
 }  // namespace
 
-double autoSpacing(const Scene& scene) {
+double sceneLargestExtent(const Scene& scene) {
   glm::vec3 lo, hi;
   sceneBounds(scene, lo, hi);
-  const double extent = std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z});
+  return std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z});
+}
+
+double autoSpacing(const Scene& scene) {
+  const double extent = sceneLargestExtent(scene);
   double spacing = 1.0;
   if (!(extent > 0.0) || !std::isfinite(extent)) return spacing;  // no triangles: placement refuses the scene
   while (extent < kAutoSpacingVoxels * spacing && spacing > 1.0 / 1024.0) spacing *= 0.5;
@@ -151,12 +155,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
     stats.mergedProbes = mergeProbes(placed, 0.1);
     timer.mark("place");
     if (placed.size() < 4) {
-      glm::vec3 lo, hi;
-      sceneBounds(scene, lo, hi);
       std::ostringstream msg;
       msg << "only " << placed.size()
           << " probe(s) left after voxel placement (need at least 4 that are not all coplanar) at --spacing "
-          << options.spacing << " m in a scene " << std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z})
+          << options.spacing << " m in a scene " << sceneLargestExtent(scene)
           << " m across (voxels touching geometry hold no probe): try a smaller --spacing (auto picks "
           << autoSpacing(scene) << " m here)";
       throw InputError(msg.str());

@@ -105,6 +105,9 @@ struct PipelineStats {
 inline constexpr double kAutoSpacingVoxels = 8.0;
 double autoSpacing(const Scene& scene);
 
+// The largest extent of `scene`'s bounds (sceneBounds), in metres; 0 without triangles.
+double sceneLargestExtent(const Scene& scene);
+
 // Runs every stage on a loaded scene. Throws InputError when the input cannot give a level (e.g. fewer than
 // four probes survive placement).
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats);
