@@ -37,8 +37,10 @@ void main() {
   TetraprobeLocation loc = tetraprobeLocate(p.xyz, -1);
   vec3 c = kNone;
   if (loc.tet >= 0 && tetraprobeOccTetCount != 0u) {  // as tetraprobeIrradiance: the hull tet outside too
-    uint kind = tetraprobeOccData[2u * uint(loc.tet)] & 3u;
-    c = kind == 1u ? kPlanes : kind == 2u ? kShadowMaps : kNone;
+    uint kind = tetraprobeOccKind(loc.tet);
+    c = kind == TETRAPROBE_OCC_KIND_PLANES        ? kPlanes
+        : kind == TETRAPROBE_OCC_KIND_SHADOW_MAPS ? kShadowMaps
+                                                  : kNone;
     float fallback = 0.0;
     tetraprobeOccApply(loc.weights, tetraprobeLookupVisibility(loc, p.xyz, n), fallback);
     if (fallback > 0.0) c = mix(c, kFallback, 0.5 + 0.5 * fallback);

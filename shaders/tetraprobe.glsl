@@ -51,7 +51,8 @@ layout(constant_id = TETRAPROBE_SPEC_ID + 2) const bool tetraprobeUseShadowMaps 
 layout(constant_id = TETRAPROBE_SPEC_ID + 3) const bool tetraprobeUseOuterCells = true;
 layout(constant_id = TETRAPROBE_SPEC_ID + 4) const bool tetraprobeUseCellGrid = true;
 
-// The CPU query's constants (runtime/src/query.cpp: kInsideEps, kCycleAcceptEps, kMaxHintSteps).
+// The CPU query's constants (runtime/lookup_constants.h: kLookupInsideEps, kLookupCycleAcceptEps,
+// kLookupMaxHintSteps).
 #ifndef TETRAPROBE_INSIDE_EPS
 #define TETRAPROBE_INSIDE_EPS 1e-6
 #endif
@@ -62,9 +63,10 @@ layout(constant_id = TETRAPROBE_SPEC_ID + 4) const bool tetraprobeUseCellGrid = 
 #define TETRAPROBE_MAX_HINT_STEPS 256
 #endif
 
-// Outer cells (runtime/src/outer_cells.cpp, query.cpp: kMaxOuterSteps; the root solver's thresholds in
-// float: a term below TETRAPROBE_OUTER_NEGLIGIBLE of the others is dropped, roots within
-// TETRAPROBE_OUTER_ZERO_ROOT * scale below 0 count as 0, none beyond TETRAPROBE_OUTER_MAX_T * scale).
+// Outer cells (runtime/lookup_constants.h: kLookupMaxOuterSteps, kLookupOuterMaxT, kGpuOuterNegligible,
+// kGpuOuterZeroRoot; the root solver's thresholds in float: a term below TETRAPROBE_OUTER_NEGLIGIBLE of the
+// others is dropped, roots within TETRAPROBE_OUTER_ZERO_ROOT * scale below 0 count as 0, none beyond
+// TETRAPROBE_OUTER_MAX_T * scale).
 #ifndef TETRAPROBE_MAX_OUTER_STEPS
 #define TETRAPROBE_MAX_OUTER_STEPS 1024
 #endif
@@ -88,8 +90,9 @@ struct TetraprobeLocation {
 
 // Probe p's position (local frame, metres).
 vec3 tetraprobeProbePosition(int p) {
-  return uintBitsToFloat(
-      uvec3(tetraprobeProbeData[3 * p], tetraprobeProbeData[3 * p + 1], tetraprobeProbeData[3 * p + 2]));
+  return uintBitsToFloat(uvec3(tetraprobeProbeData[TETRAPROBE_POSITION_UINTS * p],
+                               tetraprobeProbeData[TETRAPROBE_POSITION_UINTS * p + 1],
+                               tetraprobeProbeData[TETRAPROBE_POSITION_UINTS * p + 2]));
 }
 
 // tetraprobe::BaryFrame (level.h): w_i = dot(g[i], X - origin) for i = 0..2, w_3 = 1 - the others, from the
@@ -478,8 +481,8 @@ int tetraprobeCellStartTet(vec3 x) {
   int node = 0;
   bool found = false;
   for (uint p = 0u; p < tetraprobeCellMaxProbe; ++p) {
-    int b = 4 * int(h);
-    if (tetraprobeCellData[b] == int(0x80000000u)) break;
+    int b = TETRAPROBE_CELL_SLOT_INTS * int(h);
+    if (tetraprobeCellData[b] == TETRAPROBE_EMPTY_LEAF) break;
     if (tetraprobeCellData[b] == key.x && tetraprobeCellData[b + 1] == key.y &&
         tetraprobeCellData[b + 2] == key.z) {
       node = tetraprobeCellData[b + 3];
@@ -490,13 +493,13 @@ int tetraprobeCellStartTet(vec3 x) {
   }
   if (!found) return -1;
   for (int d = 0; d < 256 && node >= 0; ++d) {
-    int b = tetraprobeCellNodeOffset + 6 * node;
+    int b = tetraprobeCellNodeOffset + TETRAPROBE_BSP_NODE_INTS * node;
     vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1],
                                    tetraprobeCellData[b + 2], tetraprobeCellData[b + 3]));
     precise float s = pl.x * x.x + pl.y * x.y + pl.z * x.z + pl.w;
     node = tetraprobeCellData[b + 4 + (s >= 0.0 ? 1 : 0)];
   }
-  return node >= 0 || node == int(0x80000000u) ? -1 : ~node;
+  return node >= 0 || node == TETRAPROBE_EMPTY_LEAF ? -1 : ~node;
 }
 
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
@@ -613,10 +616,12 @@ vec3 tetraprobeShIrradianceVariant(vec3 c[9], vec3 n) {
 // runtime/sh_half.h: 14 uints a probe from 3 * tetraprobeProbeCount, the scale in the high half of the
 // last). Exact in float, so these are the floats decodeShHalf gives the CPU.
 float tetraprobeShScale(int p) {
-  return unpackHalf2x16(tetraprobeProbeData[3 * tetraprobeProbeCount + 14 * p + 13]).y;
+  return unpackHalf2x16(tetraprobeProbeData[TETRAPROBE_POSITION_UINTS * tetraprobeProbeCount +
+                                            TETRAPROBE_SH_UINTS * p + TETRAPROBE_SH_SCALE_UINT])
+      .y;
 }
 vec3 tetraprobeProbeSh(int p, int i, float scale) {
-  int base = 3 * tetraprobeProbeCount + 14 * p;
+  int base = TETRAPROBE_POSITION_UINTS * tetraprobeProbeCount + TETRAPROBE_SH_UINTS * p;
   int j = 3 * i;  // halves j, j + 1, j + 2; half k lives in uint k / 2, low bits for even k
   vec2 a = unpackHalf2x16(tetraprobeProbeData[base + (j >> 1)]);
   vec2 b = unpackHalf2x16(tetraprobeProbeData[base + (j >> 1) + 1]);
@@ -722,8 +727,8 @@ float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's 
     b[k] = max(b[k], 0.0);
     sum = sum + b[k];
     uint q = tetraprobeOccByte(word0, corner[k]);
-    anyHit = anyHit || q != 255u;
-    precise float d = q == 255u ? 1.0 : max(float(q), 0.5) / 254.0;
+    anyHit = anyHit || q != TETRAPROBE_SHADOW_NO_HIT;
+    precise float d = q == TETRAPROBE_SHADOW_NO_HIT ? 1.0 : max(float(q), 0.5) / TETRAPROBE_SHADOW_SCALE;
     inv = inv + b[k] / d;
   }
   if (!anyHit) return 2.0;
@@ -733,31 +738,36 @@ float tetraprobeOccDepth(uint word0, float u, float v) {  // word0: the probe's 
 
 // The occlusion kind tet t stores (0 none, 1 planes, 2 shadow maps; 0 past the records).
 uint tetraprobeOccKind(int t) {
-  return (t >= 0 && uint(t) < tetraprobeOccTetCount) ? (tetraprobeOccData[2u * uint(t)] & 3u) : 0u;
+  return (t >= 0 && uint(t) < tetraprobeOccTetCount)
+             ? (tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)] & 3u)
+             : 0u;
 }
 
 // Per-probe visibility of tet t's probes from local point x with surface normal n, `frame` being t's
 // tetraprobeBaryFrame (occlusionVisibility with the frame given).
 vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, vec3 n) {
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
-  uint header = tetraprobeOccData[2u * uint(t)], cells = tetraprobeOccData[2u * uint(t) + 1u];
+  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)],
+       cells = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t) + 1u];
   uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
-  if (!(kind == 1u && tetraprobeUsePlanes) && !(kind == 2u && tetraprobeUseShadowMaps)) return vec4(1.0);
+  if (!(kind == TETRAPROBE_OCC_KIND_PLANES && tetraprobeUsePlanes) &&
+      !(kind == TETRAPROBE_OCC_KIND_SHADOW_MAPS && tetraprobeUseShadowMaps))
+    return vec4(1.0);
   vec4 w = tetraprobeBaryWeights(frame, x);
   if (isnan(n.x) || isnan(n.y) || isnan(n.z) || isinf(n.x) || isinf(n.y) || isinf(n.z)) n = vec3(0.0);
   w = tetraprobeOccBias(frame, w, n);
   vec4 vis = vec4(1.0);
-  if (tetraprobeUsePlanes && kind == 1u) {
+  if (tetraprobeUsePlanes && kind == TETRAPROBE_OCC_KIND_PLANES) {
     if (count == 0u) return vec4(1.0);
     float s[3] = float[3](1.0, 1.0, 1.0);
     for (uint k = 0u; k < count; ++k) {
       // Four snorm16 (OcclusionPlane::value): sign-extended, times the float nearest 1/32767 (exactly the
       // CPU's 1.0f / 32767.0f, bits 0x38000100).
-      uint o = tetraprobeOccPlaneOffset + 2u * (offset + k);
+      uint o = tetraprobeOccPlaneOffset + TETRAPROBE_OCC_PLANE_UINTS * (offset + k);
       int a = int(tetraprobeOccData[o]), b = int(tetraprobeOccData[o + 1u]);
       vec4 c = vec4(ivec4(bitfieldExtract(a, 0, 16), bitfieldExtract(a, 16, 16), bitfieldExtract(b, 0, 16),
                           bitfieldExtract(b, 16, 16))) *
-               3.0518509447574615e-05;
+               TETRAPROBE_OCC_PLANE_UNIT;
       precise float d = c.x * w.x + c.y * w.y + c.z * w.z + c.w * w.w;
       s[k] = tetraprobeOccSmooth(-TETRAPROBE_OCC_PLANE_HALF, TETRAPROBE_OCC_PLANE_HALF, d);
     }
@@ -770,13 +780,13 @@ vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, ve
     }
     vis = clamp(acc, 0.0, 1.0);
   } else if (tetraprobeUseShadowMaps) {
-    uint block = tetraprobeOccShadowOffset + 16u * offset;
+    uint block = tetraprobeOccShadowOffset + TETRAPROBE_SHADOW_BLOCK_UINTS * offset;
     for (int i = 0; i < 4; ++i) {
       int j0 = i == 0 ? 1 : 0, j1 = i <= 1 ? 2 : 1, j2 = i <= 2 ? 3 : 2;
       float a = max(w[j0], 0.0), b = max(w[j1], 0.0), c = max(w[j2], 0.0);
       precise float sum = a + b + c;
       precise float u = sum > 0.0 ? b / sum : 1.0 / 3.0, v = sum > 0.0 ? c / sum : 1.0 / 3.0;
-      float depth = tetraprobeOccDepth(block + 4u * uint(i), u, v);
+      float depth = tetraprobeOccDepth(block + TETRAPROBE_SHADOW_PROBE_UINTS * uint(i), u, v);
       if (depth > 1.0) continue;
       precise float f = 1.0 - w[i];
       precise float lo = depth - TETRAPROBE_OCC_SHADOW_HALF, hi = depth + TETRAPROBE_OCC_SHADOW_HALF;

@@ -1,11 +1,14 @@
-// tetraprobe_layout.glsl: the GPU buffers of one uploaded level (std430). Mirrored field for field, with sizes
-// and offsets static_assert'ed, in runtime/include/tetraprobe/runtime/gpu_layout.h. Permissive.
+// tetraprobe_layout.glsl: the GPU buffers of one uploaded level (std430) and the constants of their records.
+// Mirrored field for field in runtime/include/tetraprobe/runtime/gpu_layout.h, where sizes and offsets are
+// static_assert'ed; tests/runtime/test_glsl_layout.cpp compiles this file with glslang and fails when one block
+// offset, array stride, binding or constant here differs from the C++ (no Vulkan device needed). Permissive.
 //
-// Bindings (all storage buffers, read-only) in descriptor set TETRAPROBE_SET:
+// Bindings (all storage buffers, read-only) in descriptor set TETRAPROBE_SET (tetraprobe::GpuBinding):
 //   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 32 bytes each (tetraprobe::Tet)
-//   TETRAPROBE_BINDING + 1  TetraprobeProbes  positions (3 floats per probe), then SH (27 floats per probe)
+//   TETRAPROBE_BINDING + 1  TetraprobeProbes  positions (3 floats a probe), then SH (tetraprobe::ShHalf, 14 uints
+//                           a probe)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
-//   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 128 bytes per cell
+//   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 80 bytes per cell
 //   TETRAPROBE_BINDING + 4  TetraprobeCells  the sparse cell grid + BSP: a 32-byte header, then int data
 //   TETRAPROBE_BINDING + 5  TetraprobeOcclusion  per-tet occlusion: a 16-byte header, then uint data
 // Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
@@ -18,6 +21,24 @@
 #ifndef TETRAPROBE_BINDING
 #define TETRAPROBE_BINDING 0
 #endif
+
+// Record constants (C++ names in brackets; checked against them by tests/runtime/test_glsl_layout.cpp).
+#define TETRAPROBE_POSITION_UINTS 3  // a probe's position in TetraprobeProbes [kGpuPositionFloatsPerProbe]
+#define TETRAPROBE_SH_UINTS 14       // a probe's ShHalf in TetraprobeProbes [kGpuShUintsPerProbe]
+#define TETRAPROBE_SH_SCALE_UINT 13  // the uint whose high half holds the probe's scale [ShHalf::h[27]]
+#define TETRAPROBE_CELL_SLOT_INTS 4  // a hash slot: key x, y, z, root [CellSlot]
+#define TETRAPROBE_BSP_NODE_INTS 6   // a BSP node: plane (4 float bits), child under, over [BspNode]
+#define TETRAPROBE_EMPTY_LEAF int(0x80000000u)  // an empty slot's key x, a leaf naming no tet [kEmptyLeaf]
+#define TETRAPROBE_OCC_RECORD_UINTS 2u          // a tet's occlusion record: header, cells [TetOcclusion]
+#define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
+#define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
+#define TETRAPROBE_OCC_PLANE_UINTS 2u           // a plane: four snorm16 [OcclusionPlane]
+// snorm16 to float: the float nearest 1 / 32767 [OcclusionPlane::kOcclusionPlaneUnit]
+#define TETRAPROBE_OCC_PLANE_UNIT 3.0518509447574615e-05
+#define TETRAPROBE_SHADOW_BLOCK_UINTS 16u  // a tet's four shadow maps [kShadowMapBlockBytes / 4]
+#define TETRAPROBE_SHADOW_PROBE_UINTS 4u   // one probe's shadow map [kShadowMapTexels / 4]
+#define TETRAPROBE_SHADOW_NO_HIT 255u  // a lattice depth byte: nothing met before the face [kShadowMapNoHit]
+#define TETRAPROBE_SHADOW_SCALE 254.0  // depth byte = round(254 f) [kShadowMapScale]
 
 // One tetrahedron. v: probe indices; n[i]: the tet across the face opposite v[i], -1 on the hull.
 // Barycentrics come from the four probe positions (tetraprobeBaryFrame in tetraprobe.glsl).

@@ -9,6 +9,8 @@
 // shrinking bracket, so a root is never missed, never NaN, and the smallest one >= 0 is taken.
 #include "tetraprobe/runtime/outer_cells.h"
 
+#include "tetraprobe/runtime/lookup_constants.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -22,7 +24,7 @@ namespace {
 
 constexpr double kNegligible = 1e-13;  // a term below this fraction of the others (at t = scale) is dropped
 constexpr double kZeroRoot = 1e-12;    // roots in [-kZeroRoot * scale, 0) count as t = 0
-constexpr double kMaxT = 1e4;          // roots beyond kMaxT * scale are not looked for
+constexpr double kMaxT = kLookupOuterMaxT;  // roots beyond kMaxT * scale are not looked for
 
 double horner(const double c[4], double t) {
   return ((c[3] * t + c[2]) * t + c[1]) * t + c[0];

@@ -16,6 +16,7 @@
 #include "tetraprobe/runtime/query.h"
 
 #include "tetraprobe/runtime/face_blend.h"
+#include "tetraprobe/runtime/lookup_constants.h"
 #include "tetraprobe/runtime/occlusion.h"
 
 #include "tetraprobe/runtime/outer_cells.h"
@@ -35,21 +36,22 @@ namespace tetraprobe {
 namespace {
 
 constexpr int kMaxWalkSteps = 4096;
-constexpr int kMaxHintSteps = 256;        // a hint's walk, before falling back to the start grid
-constexpr double kCycleAcceptEps = 1e-4;  // a walk cycle is answered by its best tet if within this
-constexpr double kInsideEps = 1e-6;       // a weight >= -kInsideEps counts as inside (Location::inside)
-constexpr double kProbesPerCell = 12.0;   // start grid density (8-16 probes per cell)
-constexpr int kMaxGridDim = 1024;         // per axis
+constexpr int kMaxHintSteps = kLookupMaxHintSteps;  // lookup_constants.h (the GLSL mirrors them)
+constexpr double kCycleAcceptEps = kLookupCycleAcceptEps;
+constexpr double kInsideEps = kLookupInsideEps;
+constexpr double kProbesPerCell = 12.0;  // start grid density (8-16 probes per cell)
+constexpr int kMaxGridDim = 1024;        // per axis
 constexpr double kMaxGridCells = double(1 << 22);
 constexpr int kExactRings = 2;  // nearest-centroid search radius before the flood fill takes over
 constexpr size_t kMinBatchPerThread = 256;
 // Plain walk steps (across a face x is clearly beyond) taken from the cell grid's start tet before
 // the full walk (walk()); irradianceBatch takes them in lock step over a group of queries.
 constexpr int kPlainSteps = 8;
-constexpr int kHintPlainSteps = 3;    // irradianceBatch: steps from the previous query's tet
-constexpr size_t kBatchGroup = 16;    // irradianceBatch: queries interleaved stage by stage
-constexpr size_t kHintRecent = 4;     // irradianceBatch: "coherent" while the hint answered this recently
-constexpr int kMaxOuterSteps = 1024;  // an outer-cell walk, before the scan of every outer cell
+constexpr int kHintPlainSteps = 3;  // irradianceBatch: steps from the previous query's tet
+constexpr size_t kBatchGroup = 16;  // irradianceBatch: queries interleaved stage by stage
+constexpr size_t kHintRecent = 4;   // irradianceBatch: "coherent" while the hint answered this recently
+constexpr int kMaxOuterSteps =
+    kLookupMaxOuterSteps;  // an outer-cell walk, before the scan of every outer cell
 // A tet whose smallest weight at x is at least this holds x alone (no other tet within kInsideEps): its
 // answer is final without a walk (gridLocate, irradianceBatch's previous tet).
 constexpr double kBoundaryBand = 1e-4;
