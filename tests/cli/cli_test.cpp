@@ -795,8 +795,8 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
                 path("before.json").string())
                 .code,
             0);
-  const CliRun after = run("bake " + common + " -o " + path("after.tpb").string() + " --report " +
-                           path("after.json").string());
+  const CliRun after = run("bake " + common + " --fill-holes 3 -o " + path("after.tpb").string() +
+                           " --report " + path("after.json").string());
   ASSERT_EQ(after.code, 0) << after.err;
   const size_t plus = after.out.find('+', after.out.find("holes"));
   ASSERT_NE(plus, std::string::npos) << after.out;
@@ -848,8 +848,8 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
 
   // --hole-rule unseen leaves alone only hole points whose fallback probe a ray reaches; this point's (the
   // right room's probe beyond the panel) is hidden, so it still gets its probe and its own side's light.
-  ASSERT_EQ(run("bake " + common + " --hole-rule unseen -o " + path("unseen.tpb").string() + " --report " +
-                path("unseen.json").string())
+  ASSERT_EQ(run("bake " + common + " --fill-holes 3 --hole-rule unseen -o " + path("unseen.tpb").string() +
+                " --report " + path("unseen.json").string())
                 .code,
             0);
   const auto rounds = nlohmann::json::parse(slurp(path("unseen.json"))).at("holes").at("rounds");
