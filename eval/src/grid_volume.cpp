@@ -133,62 +133,20 @@ GridVolume bakeGridVolume(const SceneTracer& tracer, const GridLayout& layout, c
 
 std::vector<std::pair<std::string, std::string>> generatorFields(const std::string& generator) {
   std::vector<std::pair<std::string, std::string>> out;
+  // The "key=value; " form never holds an option ("--name"); a ';' in the option list's values does not
+  // make it one.
+  const bool items = generator.find(';') != std::string::npos && generator.find(" --") == std::string::npos;
   std::istringstream in(generator);
   std::string item;
-  while (std::getline(in, item, ';')) {
+  while (items ? static_cast<bool>(std::getline(in, item, ';')) : static_cast<bool>(in >> item)) {
     const size_t eq = item.find('=');
     if (eq == std::string::npos) continue;
     std::string key = item.substr(0, eq);
     key.erase(0, key.find_first_not_of(' '));
+    key.erase(key.find_last_not_of(' ') + 1);
     out.emplace_back(std::move(key), item.substr(eq + 1));
   }
   return out;
-}
-
-LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32_t content) {
-  LevelBakeSettings s;
-  // `tetraprobe bake`'s defaults (tools/cli/cmd_bake.cpp).
-  s.bake.bounces = kUnboundedBounces;
-  s.bake.samplesPerProbe = 256;
-  s.bake.targetRelError = 0.02;
-  s.bake.maxSamplesPerProbe = 8192;
-  s.bake.seed = 1;
-  s.bake.shOrder = 2;
-  s.bake.content = content;
-  s.dering.mode = DeringMode::kAuto;
-  for (const auto& [key, value] : generatorFields(generator)) {
-    try {
-      if (key == "bounces")
-        s.bake.bounces = std::stoi(value);
-      else if (key == "samples")
-        s.bake.samplesPerProbe = std::stoi(value);
-      else if (key == "target_error")
-        s.bake.targetRelError = std::stod(value);
-      else if (key == "max_samples")
-        s.bake.maxSamplesPerProbe = std::stoi(value);
-      else if (key == "path_budget")
-        s.bake.pathBudget = std::stoull(value);
-      else if (key == "seed")
-        s.bake.seed = std::stoull(value);
-      else if (key == "sh_order")
-        s.bake.shOrder = std::stoi(value);
-      else if (key == "dering") {
-        if (value == "none")
-          s.dering.mode = DeringMode::kNone;
-        else if (value == "auto")
-          s.dering.mode = DeringMode::kAuto;
-        else {
-          s.dering.mode = DeringMode::kFixed;
-          s.dering.strength = std::stod(value);
-        }
-      } else
-        continue;
-      s.found.push_back(key);
-    } catch (const std::exception&) {
-      // A value that does not parse keeps the default (the text is free-form).
-    }
-  }
-  return s;
 }
 
 }  // namespace tetraprobe

@@ -795,8 +795,8 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
                 path("before.json").string())
                 .code,
             0);
-  const CliRun after = run("bake " + common + " -o " + path("after.tpb").string() + " --report " +
-                           path("after.json").string());
+  const CliRun after = run("bake " + common + " --fill-holes 3 -o " + path("after.tpb").string() +
+                           " --report " + path("after.json").string());
   ASSERT_EQ(after.code, 0) << after.err;
   const size_t plus = after.out.find('+', after.out.find("holes"));
   ASSERT_NE(plus, std::string::npos) << after.out;
@@ -848,8 +848,8 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
 
   // --hole-rule unseen leaves alone only hole points whose fallback probe a ray reaches; this point's (the
   // right room's probe beyond the panel) is hidden, so it still gets its probe and its own side's light.
-  ASSERT_EQ(run("bake " + common + " --hole-rule unseen -o " + path("unseen.tpb").string() + " --report " +
-                path("unseen.json").string())
+  ASSERT_EQ(run("bake " + common + " --fill-holes 3 --hole-rule unseen -o " + path("unseen.tpb").string() +
+                " --report " + path("unseen.json").string())
                 .code,
             0);
   const auto rounds = nlohmann::json::parse(slurp(path("unseen.json"))).at("holes").at("rounds");
@@ -1075,4 +1075,196 @@ TEST_F(Cli, EvalReferenceInReproducesTheTracedRunAndRefusesOtherPoints) {
   const CliRun other = run(base + " --seed 7 --reference-in " + path("pts.csv").string());
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("reference point"), std::string::npos) << other.err;
+}
+
+// ---- One source of truth for the bake's options: the generator string, --options-from, --probes, --seed ----
+
+namespace {
+
+std::string generatorOf(const CliRun& inspectJson) {
+  return nlohmann::json::parse(inspectJson.out).at("generator").get<std::string>();
+}
+
+}  // namespace
+
+// A placed, traced, one-machine level records every option that changes it in its generator string (no path,
+// no thread count), and baking the same scene from that string alone gives the same file byte for byte, for
+// any thread count; options given next to --options-from override the recorded ones.
+TEST_F(Cli, LevelRebakesFromItsOwnGeneratorByteForByte) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  // The defaults but for cheaper sampling (every stage runs: holes, refinement at an automatic budget), and
+  // numbers whose text must come back exactly.
+  const CliRun a =
+      run("bake " + path("box.obj").string() + " -o " + path("a.tpb").string() +
+          " --samples 32 --max-samples 512 --path-budget 300000 --refine-points 256 --spacing 0.7"
+          " --dering 0.3 --min-agreement 0.97 --seed 18446744073709551615 --threads 2");
+  ASSERT_EQ(a.code, 0) << a.err;
+  const CliRun info = run("inspect --json " + path("a.tpb").string());
+  ASSERT_EQ(info.code, 0) << info.err;
+  const std::string generator = generatorOf(info);
+  for (const char* item :
+       {"--spacing=0.7 ", "--samples=32 ", "--noise=0.02 ", "--path-budget=300000 ",
+        "--seed=18446744073709551615 ", "--dering=0.3 ", "--min-agreement=0.97 ", "--fill-holes=3 ",
+        "--probe-budget=auto ", "--refine-points=256 ", "--max-spacing=10 ", "--filler-spacing=4 ",
+        "--shell-spacing=auto ", "--refine-offset=auto"})
+    EXPECT_NE(generator.find(item), std::string::npos) << item << " missing from: " << generator;
+  EXPECT_EQ(generator.find("thread"), std::string::npos) << generator;
+  EXPECT_EQ(generator.find(dir_.string()), std::string::npos) << "a path in the generator: " << generator;
+  EXPECT_EQ(generator.find("box.obj"), std::string::npos) << generator;
+
+  const CliRun b = run("bake " + path("box.obj").string() + " --options-from " + path("a.tpb").string() +
+                       " -o " + path("b.tpb").string() + " --threads 1");
+  ASSERT_EQ(b.code, 0) << b.err;
+  const std::string ba = slurp(path("a.tpb")), bb = slurp(path("b.tpb"));
+  ASSERT_FALSE(ba.empty());
+  EXPECT_TRUE(ba == bb) << "the re-bake from the generator differs from the level";
+
+  const CliRun c = run("bake " + path("box.obj").string() + " --options-from " + path("a.tpb").string() +
+                       " --seed 5 --fill-holes 0 --probe-budget 0 -o " + path("c.tpb").string());
+  ASSERT_EQ(c.code, 0) << c.err;
+  const std::string overridden = generatorOf(run("inspect --json " + path("c.tpb").string()));
+  EXPECT_NE(overridden.find("--seed=5 "), std::string::npos) << overridden;
+  EXPECT_NE(overridden.find("--samples=32 "), std::string::npos) << overridden;
+  EXPECT_NE(slurp(path("c.tpb")), ba);
+}
+
+// A level whose generator string predates the option list (";"-separated items under other names) reads as
+// the options it records, the rest at today's defaults but for the path budget, which such levels did not
+// have: --options-from bakes what the same options given by hand bake.
+TEST_F(Cli, EarlierGeneratorStringReadsAsTheOptionsItRecords) {
+  bakeBox();
+  if (HasFatalFailure()) return;
+  tetraprobe::Level level;
+  ASSERT_TRUE(tetraprobe::loadLevel(path("l.tpb").string(), level));
+  level.generator =
+      "tetraprobe 0.1.0 bake; placement=voxel; tetra=cgal; spacing=0.75; shell_spacing=0.75; "
+      "bounces=1048576; "
+      "samples=16; target_error=0; max_samples=8192; content=default; seed=7; sh_order=2; dering=auto; "
+      "occlusion=auto; hole_rounds=1; min_agreement=0.98";
+  ASSERT_TRUE(tetraprobe::saveLevel(path("old.tpb").string(), level));
+  const CliRun from = run("bake " + path("box.obj").string() + " --options-from " + path("old.tpb").string() +
+                          " --refine-points 256 -o " + path("from.tpb").string());
+  ASSERT_EQ(from.code, 0) << from.err;
+  const CliRun byHand = run("bake " + path("box.obj").string() +
+                            " --spacing 0.75 --samples 16 --noise 0 --seed 7 --fill-holes 1 --path-budget 0"
+                            " --refine-points 256 -o " +
+                            path("hand.tpb").string());
+  ASSERT_EQ(byHand.code, 0) << byHand.err;
+  EXPECT_TRUE(slurp(path("from.tpb")) == slurp(path("hand.tpb")))
+      << generatorOf(run("inspect --json " + path("from.tpb").string())) << "\nvs\n"
+      << generatorOf(run("inspect --json " + path("hand.tpb").string()));
+  // A level that records no option cannot give them.
+  level.generator = "imported by hand";
+  ASSERT_TRUE(tetraprobe::saveLevel(path("bare.tpb").string(), level));
+  const CliRun bare = run("bake " + path("box.obj").string() + " --options-from " +
+                          path("bare.tpb").string() + " -o " + path("x.tpb").string());
+  EXPECT_EQ(bare.code, 2);
+  EXPECT_EQ(lineCount(bare.err), 1) << bare.err;
+  EXPECT_FALSE(fs::exists(path("x.tpb")));
+}
+
+// `bake --probes FILE` alone: the file's probes are the level's probes. 60 probes in a room split by a wall,
+// 56 of them on the left: the wall's right face sees none of its tets' probes, yet no hole probe or
+// refinement probe is added unless asked; --fill-holes 3 and --probe-budget N opt in and add probes. A level
+// baked from a probe file records the file's name and --options-from wants the file again.
+TEST_F(Cli, UserProbesAloneAreTheLevelsOnlyProbesUnlessFillingIsAsked) {
+  write("wall.obj", wallSceneObj());
+  write("wall.mtl",
+        "newmtl white\nKd 0.7 0.7 0.7\nnewmtl bright\nKd 0 0 0\nKe 200 200 200\nnewmtl dim\nKd 0 0 0\nKe 5 5 "
+        "5\n");
+  std::ostringstream csv;
+  csv << "-1,1,-1\n-1,3,-1\n-1,2,1.5\n3,2,0\n";  // PointSeeingNoneOfItsProbes...'s four probes
+  int count = 4;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 2; ++j)
+      for (int k = 0; k < 7; ++k, ++count)
+        csv << -3.5 + 0.8 * i << "," << 0.7 + 2.6 * j << "," << -3.3 + k << "\n";
+  ASSERT_EQ(count, 60);
+  write("probes.csv", csv.str());
+  const std::string common = "bake " + path("wall.obj").string() + " --probes " +
+                             path("probes.csv").string() +
+                             " --samples 64 --noise 0 --refine-points 256 --threads 2";
+  auto probes = [&](const std::string& level) {
+    const CliRun info = run("inspect --json " + path(level).string());
+    EXPECT_EQ(info.code, 0) << info.err;
+    return nlohmann::json::parse(info.out).at("probes").at("count").get<int>();
+  };
+
+  const CliRun alone = run(common + " -o " + path("alone.tpb").string());
+  ASSERT_EQ(alone.code, 0) << alone.err;
+  EXPECT_EQ(probes("alone.tpb"), 60) << alone.out;
+  const std::string generator = generatorOf(run("inspect --json " + path("alone.tpb").string()));
+  EXPECT_NE(generator.find("--probes=probes.csv --placement=none "), std::string::npos) << generator;
+  EXPECT_NE(generator.find("--fill-holes=0 "), std::string::npos) << generator;
+  EXPECT_NE(generator.find("--probe-budget=0 "), std::string::npos) << generator;
+
+  const CliRun holes = run(common + " --fill-holes 3 -o " + path("holes.tpb").string());
+  ASSERT_EQ(holes.code, 0) << holes.err;
+  EXPECT_GT(probes("holes.tpb"), 60) << holes.out;
+  const CliRun refined = run(common + " --probe-budget 16 -o " + path("refined.tpb").string());
+  ASSERT_EQ(refined.code, 0) << refined.err;
+  EXPECT_GT(probes("refined.tpb"), 60) << refined.out;
+  EXPECT_LE(probes("refined.tpb"), 60 + 16) << refined.out;
+
+  // --options-from: the probe file is given again (any path), or the bake refuses.
+  const CliRun missing = run("bake " + path("wall.obj").string() + " --options-from " +
+                             path("alone.tpb").string() + " -o " + path("x.tpb").string());
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find("--probes"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(path("x.tpb")));
+  const CliRun again =
+      run("bake " + path("wall.obj").string() + " --options-from " + path("alone.tpb").string() +
+          " --probes " + path("probes.csv").string() + " -o " + path("again.tpb").string());
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(slurp(path("again.tpb")) == slurp(path("alone.tpb")));
+}
+
+// --seed is an unsigned 64-bit integer: a sign, a fraction or a value past 2^64-1 is bad usage (exit 2, one
+// line naming the option, no file), and 2^64-1 itself is a seed like any other.
+TEST_F(Cli, SeedIsAnUnsigned64BitInteger) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string base = "bake " + path("box.obj").string() +
+                           " --samples 16 --noise 0 --fill-holes 0 --probe-budget 0 --threads 2 -o " +
+                           path("l.tpb").string() + " --seed ";
+  for (const char* bad : {"-1", "1.5", "18446744073709551616", "1e3", "+1", "0x10", ""}) {
+    const CliRun r = run(base + "'" + bad + "'");
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
+    EXPECT_EQ(lineCount(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("l.tpb"))) << bad;
+  }
+  const CliRun top = run(base + "18446744073709551615");
+  ASSERT_EQ(top.code, 0) << top.err;
+  EXPECT_NE(generatorOf(run("inspect --json " + path("l.tpb").string())).find("--seed=18446744073709551615 "),
+            std::string::npos);
+}
+
+// `eval --sweep` re-bakes with the options the level records (pipelineOptionsFromGenerator), not with a
+// library set of its own: at the level's own spacing the swept level is the level under test, so its tet
+// row matches the level's to the byte and the last digit (here with a filler lattice, a max spacing and a
+// path budget other than the defaults, none of which the sweep read before).
+TEST_F(Cli, EvalSweepAtTheLevelsSpacingRebakesTheLevel) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const CliRun bake = run("bake " + path("box.obj").string() + " -o " + path("l.tpb").string() +
+                          " --spacing 0.75 --max-spacing 1.5 --filler-spacing 1.5 --samples 16 --noise 0.05"
+                          " --max-samples 256 --path-budget 50000 --refine-points 256 --seed 3 --threads 2");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+  const CliRun eval =
+      run("eval " + path("box.obj").string() + " " + path("l.tpb").string() +
+          " --points 32 --samples 16 --grid none --gpu none --timing-size 16x9 --sweep spacing=0.75"
+          " --threads 2 --report " +
+          path("eval.json").string());
+  ASSERT_EQ(eval.code, 0) << eval.err;
+  const auto j = nlohmann::json::parse(slurp(path("eval.json")));
+  const auto& tet = j.at("methods").at(0);
+  ASSERT_EQ(j.at("sweep").size(), 1u);
+  const auto& swept = j.at("sweep").at(0).at("methods").at(0);
+  ASSERT_EQ(tet.at("name"), "tet");
+  ASSERT_EQ(swept.at("name"), "tet");
+  EXPECT_EQ(j.at("sweep").at(0).at("probes"), tet.at("probes"));
+  for (const char* key : {"probes", "bytes", "gross_error", "mean_rel_error", "p95_rel_error", "relmse"})
+    EXPECT_EQ(swept.at(key), tet.at(key)) << key;
 }

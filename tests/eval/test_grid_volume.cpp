@@ -137,29 +137,18 @@ TEST(GridBake, NodesInsideGeometryAreDilatedNotZero) {
   EXPECT_GT(inside, 0u);
 }
 
-// The level's bake settings are read back from its generator string; missing keys keep the defaults.
-TEST(BakeSettings, ReadFromTheGeneratorString) {
-  const LevelBakeSettings s = bakeSettingsFromGenerator(
-      "tetraprobe 0.1.0 bake; placement=voxel; tetra=cgal; spacing=1; shell_spacing=1; bounces=3; "
-      "samples=128; target_error=0.05; max_samples=4096; path_budget=5000; content=default; seed=9; "
-      "sh_order=1; dering=0.5; occlusion=auto; hole_rounds=1",
-      kContentAll);
-  EXPECT_EQ(s.bake.bounces, 3);
-  EXPECT_EQ(s.bake.samplesPerProbe, 128);
-  EXPECT_DOUBLE_EQ(s.bake.targetRelError, 0.05);
-  EXPECT_EQ(s.bake.maxSamplesPerProbe, 4096);
-  EXPECT_EQ(s.bake.pathBudget, 5000u);
-  EXPECT_EQ(s.bake.seed, 9u);
-  EXPECT_EQ(s.bake.shOrder, 1);
-  EXPECT_EQ(s.bake.content, kContentAll) << "content comes from the level's flags";
-  EXPECT_EQ(s.dering.mode, DeringMode::kFixed);
-  EXPECT_DOUBLE_EQ(s.dering.strength, 0.5);
-  const LevelBakeSettings d = bakeSettingsFromGenerator("imported by hand", kContentDefault);
-  EXPECT_TRUE(d.found.empty());
-  EXPECT_EQ(d.bake.pathBudget, 0u) << "levels baked before the path budget had none";
-  EXPECT_EQ(d.bake.bounces, kUnboundedBounces);
-  EXPECT_DOUBLE_EQ(d.bake.targetRelError, 0.02);
-  EXPECT_EQ(d.dering.mode, DeringMode::kAuto);
+// Both forms of the generator string split into their items, in order, keys trimmed; words without '='
+// (the tool and its version) are not items.
+TEST(GeneratorFields, SplitsTheOptionListAndTheEarlierItems) {
+  using Fields = std::vector<std::pair<std::string, std::string>>;
+  EXPECT_EQ(generatorFields("tetraprobe 0.1.0 bake --spacing=0.25 --dering=auto --seed=9"),
+            (Fields{{"--spacing", "0.25"}, {"--dering", "auto"}, {"--seed", "9"}}));
+  EXPECT_EQ(generatorFields("tetraprobe 0.1.0 bake; placement=voxel; samples=128; dering=0.5"),
+            (Fields{{"placement", "voxel"}, {"samples", "128"}, {"dering", "0.5"}}));
+  EXPECT_EQ(generatorFields("tetraprobe 0.1.0 bake --probes=a;b.csv --seed=1"),
+            (Fields{{"--probes", "a;b.csv"}, {"--seed", "1"}}))
+      << "a ';' in a file name does not make the option list the earlier form";
+  EXPECT_TRUE(generatorFields("imported by hand").empty());
 }
 
 // The GPU pass (shaders/lighting_grid.comp) reads the same grid the same way as GridVolume::irradiance:

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 namespace tetraprobe::cli {
@@ -78,6 +79,22 @@ double parseNumber(const std::string& text, const std::string& what) {
   return v;
 }
 
+uint64_t parseU64(const std::string& text, const std::string& what) {
+  constexpr uint64_t kMax = std::numeric_limits<uint64_t>::max();
+  uint64_t v = 0;
+  bool ok = !text.empty();
+  for (const char c : text) {
+    const uint64_t digit = uint64_t(c - '0');
+    if (c < '0' || c > '9' || v > (kMax - digit) / 10) {
+      ok = false;
+      break;
+    }
+    v = v * 10 + digit;
+  }
+  if (!ok) throw UsageError(what + ": '" + text + "' is not an integer in [0, " + std::to_string(kMax) + "]");
+  return v;
+}
+
 double Args::number(const std::string& name) const {
   return parseNumber(str(name), name);
 }
@@ -87,6 +104,10 @@ int Args::integer(const std::string& name) const {
   if (v != std::floor(v) || std::abs(v) > 2e9)
     throw UsageError(name + ": '" + str(name) + "' is not an integer");
   return int(v);
+}
+
+uint64_t Args::u64(const std::string& name) const {
+  return parseU64(str(name), name);
 }
 
 int Args::bounces(const std::string& name) const {

@@ -2,6 +2,7 @@
 // arguments, and one-line usage errors (exit code 2).
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -47,6 +48,8 @@ class Args {
   std::string str(const std::string& name) const;  // value or default
   double number(const std::string& name) const;
   int integer(const std::string& name) const;
+  // An unsigned 64-bit integer (parseU64): seeds.
+  uint64_t u64(const std::string& name) const;
   // Path depth: "unbounded" (kUnboundedBounces: Russian roulette only) or an integer in [0, 1000].
   int bounces(const std::string& name) const;
   glm::vec3 vec3(const std::string& name) const;  // "x,y,z"
@@ -61,5 +64,9 @@ class Args {
 };
 
 double parseNumber(const std::string& text, const std::string& what);
+
+// `text` as an unsigned 64-bit integer: decimal digits only (no sign, point, exponent or spaces), at most
+// 18446744073709551615; anything else is a UsageError naming `what`.
+uint64_t parseU64(const std::string& text, const std::string& what);
 
 }  // namespace tetraprobe::cli

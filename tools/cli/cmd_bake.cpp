@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "file_sections.h"
 #include "pipeline.h"
+#include "pipeline_options.h"
 #include "shard_part.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/runtime/sh_half.h"
@@ -16,203 +17,53 @@
 namespace tetraprobe::cli {
 
 int runBake(int argc, char** argv, const MergedShards* merge) {
-  Args args(
-      "tetraprobe bake SCENE -o LEVEL.tpb [options]",
-      "Bakes a level: places probes, path-traces each probe's incident radiance into SH L2 RGB,\n"
-      "tetrahedralizes the probes and writes one binary level file (written atomically).\n"
-      "SCENE is a .gltf/.glb, .obj or .scene.json file (docs/scene_format.md).",
-      {{"--output", "-o", "LEVEL.tpb", "level file to write", ""},
-       {"--report", "", "FILE.json", "also write a JSON report of the bake", ""},
-       {"--spacing", "", "auto|METRES",
-        "finest probe spacing (voxel edge near geometry and in fine volumes; grid step); auto = 1 m, or for "
-        "a scene under 8 m across the largest power of two of a metre giving 8 voxels along its largest "
-        "extent",
-        "auto"},
-       {"--probes", "", "FILE.csv",
-        "user probes (x,y,z a line), kept exactly: alone they are the only probes; with --placement they are "
-        "added to the automatic ones (automatic probes near them are dropped)",
-        ""},
-       {"--placement", "", "voxel|grid|none",
-        "voxel: probes in empty voxels next to geometry, coarser cells in open space, filler probes; grid: a "
-        "regular grid (for comparison); none: only --probes",
-        "voxel"},
-       {"--max-spacing", "", "METRES", "voxel: coarsest open-space cell", "10"},
-       {"--filler-spacing", "", "METRES", "voxel: open-space filler lattice (0 = none)", "4"},
-       {"--shell-spacing", "", "auto|METRES",
-        "voxel: shell probes on the level's bounds grown outward, so every surface lies inside a tet where "
-        "occlusion applies (docs/occlusion.md); auto = --spacing, 0 = none",
-        "auto"},
-       {"--tetra", "", "cgal|tetgen",
-        "tetrahedralizer: CGAL Delaunay + circumcentre fillers at slivers, or TetGen Delaunay + quality "
-        "refinement whose Steiner points become fillers",
-        "cgal"},
-       {"--bounces", "", "N|unbounded",
-        "diffuse bounces after the first hit; unbounded = Russian roulette only (unbiased)", "unbounded"},
-       {"--samples", "", "N", "paths per probe: the minimum with --noise, else exactly N", "256"},
-       {"--noise", "", "E",
-        "adaptive sampling: each probe takes batches of 64 paths until the standard error of its irradiance "
-        "is at most E x its mean (0 = exactly --samples paths)",
-        "0.02"},
-       {"--max-samples", "", "N", "adaptive sampling: paths per probe at most", "8192"},
-       {"--path-budget", "", "N",
-        "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "
-        "and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), so a small "
-        "level converges; 0 = none",
-        "16000000"},
-       {"--content", "", "default|all",
-        "default: everything but light arriving directly from point/spot/sun lights (drawn in real "
-        "time); all: that too",
-        "default"},
-       {"--seed", "", "N", "random seed (the output is a pure function of input, options and seed)", "1"},
-       {"--dering", "", "none|auto|S",
-        "per-probe window on SH bands 1-2 so irradiance is never negative: auto = smallest strength per "
-        "probe, S = this strength in [0, 2] for all, none = keep the SH as projected",
-        "auto"},
-       {"--sh-order", "", "1|2", "SH order of the probes (1: coefficients 4..8 zero)", "2"},
-       {"--import-sh", "", "FILE.csv",
-        "take probe positions and SH from another baker (x,y,z + 27 coefficients a line, see "
-        "bake/include/tetraprobe/bake/sh_csv.h) instead of placing and path tracing",
-        ""},
-       {"--occlusion", "", "auto|none|planes|shadow-maps",
-        "per-tet occlusion against light leaking, stored in the level (docs/occlusion.md): auto = the "
-        "cheapest of none, 1-3 planes, shadow maps that meets --min-agreement; none = store nothing",
-        "auto"},
-       {"--min-agreement", "", "F", "occlusion auto mode: fraction of ray answers the data must match",
-        "0.98"},
-       {"--fill-holes", "", "ROUNDS",
-        "rounds of occlusion-hole filling: surface points that see none of their tet's probes get a probe in "
-        "front of them, then tetrahedralize, bake and occlude again; stops early when none are left (0 = "
-        "none)",
-        "3"},
-       {"--hole-rule", "", "all|unseen",
-        "which hole points get a probe: all of them, or only those whose fallback does not already answer "
-        "with a probe they see (reached by a ray, not darker than the blend capping the fallback): fewer "
-        "probes, smaller levels and shorter bakes, accuracy mixed (docs/accuracy.md)",
-        "all"},
-       {"--probe-budget", "", "N|auto",
-        "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
-        "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
-        "the "
-        "placed probes (shell probes not counted), at least 256; 0 = none",
-        "auto"},
-       {"--refine-points", "", "N",
-        "refinement: surface points the error is measured at (twice: select, check)", "2048"},
-       {"--refine-offset", "", "auto|METRES",
-        "refinement: how far in front of its surface point a new probe sits at most (half the free "
-        "distance when less); auto = spacing / 8, close enough to see what the surface sees",
-        "auto"},
-       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"},
-       {"--shard", "", "I/N",
-        "sharded bake (docs/distributed.md): place the probes, trace passes 1-2 of shard I's probes (of N "
-        "equal-count x slabs) and write their states to -o as a part file for `tetraprobe merge`",
-        ""},
-       {"--round", "", "both|1|2",
-        "with --shard: both = passes 1-2 in one run (pass 1 of every probe is traced by every shard); "
-        "1 = pass 1 of the shard's probes only; 2 = pass 2, from --resume and --floor",
-        "both"},
-       {"--floor", "", "FILE",
-        "--round 2: the floor part `tetraprobe merge --floor` made of the round-1 parts", ""},
-       {"--resume", "", "FILE", "--round 2: this shard's round-1 part", ""}});
+  Args args("tetraprobe bake SCENE -o LEVEL.tpb [options]",
+            "Bakes a level: places probes, path-traces each probe's incident radiance into SH L2 RGB,\n"
+            "tetrahedralizes the probes and writes one binary level file (written atomically).\n"
+            "SCENE is a .gltf/.glb, .obj or .scene.json file (docs/scene_format.md).",
+            bakeOptionSpecs());
   if (!args.parse(argc, argv)) return 0;
+  // --options-from LEVEL: the level's recorded options first, then this command line's, which override them.
+  if (args.has("--options-from")) {
+    std::vector<std::string> line;
+    const std::string from = args.str("--options-from");
+    Level recorded;
+    if (const LevelResult r = loadLevel(from, recorded); !r) throw InputError(r.message);
+    bool sawOption = false;
+    for (const std::string& a : generatorArguments(recorded.generator)) {
+      sawOption = true;
+      const std::string name = a.substr(0, a.find('='));
+      if (name == "--probes" || name == "--import-sh") {
+        // The file's name is recorded, not where it is: the user gives it again.
+        if (!args.has(name))
+          throw UsageError(from + " was baked with " + name + " " + a.substr(name.size() + 1) + ": give " +
+                           name + " FILE again");
+        continue;
+      }
+      line.push_back(a);
+    }
+    if (!sawOption) throw InputError(from + "'s generator string records no bake options");
+    for (int i = 0; i < argc; ++i) line.push_back(argv[i]);
+    std::vector<char*> again;
+    for (std::string& a : line) again.push_back(a.data());
+    args = Args("tetraprobe bake SCENE -o LEVEL.tpb [options]", "", bakeOptionSpecs());
+    args.parse(int(again.size()), again.data());
+  }
   args.requirePositional(1, 1);
   if (!args.has("--output")) throw UsageError("missing -o LEVEL.tpb");
   const std::string scenePath = args.positional()[0];
   const std::string out = args.str("--output");
 
-  PipelineOptions opt;
-  const bool spacingAuto = args.str("--spacing") == "auto";  // resolved from the scene once it is loaded
-  opt.spacing = spacingAuto ? 1.0 : parseNumber(args.str("--spacing"), "--spacing");
-  if (!(opt.spacing > 0.0) || !std::isfinite(opt.spacing))
-    throw UsageError("--spacing must be auto or a positive number of metres");
-  opt.probesCsv = args.str("--probes");
-  opt.placement =
-      args.has("--placement") ? args.str("--placement") : (opt.probesCsv.empty() ? "voxel" : "none");
-  if (opt.placement != "voxel" && opt.placement != "grid" && opt.placement != "none")
-    throw UsageError("--placement must be voxel, grid or none, not '" + opt.placement + "'");
-  if (opt.placement == "none" && opt.probesCsv.empty())
-    throw UsageError("--placement none needs --probes FILE.csv");
-  if (opt.placement == "grid" && !opt.probesCsv.empty())
-    throw UsageError("--placement grid does not take --probes (use voxel or none)");
-  opt.maxSpacing = args.number("--max-spacing");
-  if (!(opt.maxSpacing >= opt.spacing)) throw UsageError("--max-spacing must be at least --spacing");
-  // (auto resolves to at most 1 m, so the check holds for it too)
-  opt.fillerSpacing = args.number("--filler-spacing");
-  if (!(opt.fillerSpacing >= 0.0)) throw UsageError("--filler-spacing must be >= 0");
-  const std::string shellSpacing = args.str("--shell-spacing");
-  opt.shellSpacing = shellSpacing == "auto" ? -1.0 : parseNumber(shellSpacing, "--shell-spacing");
-  if (!(opt.shellSpacing >= 0.0 || shellSpacing == "auto") || !std::isfinite(opt.shellSpacing))
-    throw UsageError("--shell-spacing must be auto or a finite number >= 0");
-  opt.tetra = args.str("--tetra");
-  if (opt.tetra != "cgal" && opt.tetra != "tetgen")
-    throw UsageError("--tetra must be cgal or tetgen, not '" + opt.tetra + "'");
-  opt.importShCsv = args.str("--import-sh");
-  if (!opt.probesCsv.empty() && !opt.importShCsv.empty())
-    throw UsageError("--probes and --import-sh both give the probes; use one");
-  const std::string shOrder = args.str("--sh-order");
-  if (shOrder != "1" && shOrder != "2") throw UsageError("--sh-order must be 1 or 2, not '" + shOrder + "'");
-  opt.bake.shOrder = shOrder == "1" ? 1 : 2;
-  const std::string dering = args.str("--dering");
-  if (dering == "none") {
-    opt.dering.mode = DeringMode::kNone;
-  } else if (dering == "auto") {
-    opt.dering.mode = DeringMode::kAuto;
-  } else {
-    opt.dering.mode = DeringMode::kFixed;
-    opt.dering.strength = parseNumber(dering, "--dering");
-    if (!(opt.dering.strength >= 0.0 && opt.dering.strength <= kDeringMaxStrength))
-      throw UsageError("--dering must be none, auto or a strength in [0, 2], not '" + dering + "'");
-  }
-  opt.bake.bounces = args.bounces("--bounces");
-  opt.bake.samplesPerProbe = args.integer("--samples");
-  opt.bake.threads = args.integer("--threads");
-  opt.bake.seed = uint64_t(args.number("--seed"));
-  if (opt.bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
-  opt.bake.targetRelError = args.number("--noise");
-  opt.bake.maxSamplesPerProbe = args.integer("--max-samples");
-  const double pathBudget = args.number("--path-budget");
-  if (!(pathBudget >= 0.0 && pathBudget <= 1e15))
-    throw UsageError("--path-budget must be a number of paths in [0, 1e15]");
-  opt.bake.pathBudget = uint64_t(pathBudget);
-  if (!(opt.bake.targetRelError >= 0.0) || !std::isfinite(opt.bake.targetRelError))
-    throw UsageError("--noise must be a finite number >= 0");
-  if (opt.bake.targetRelError > 0.0 && opt.bake.maxSamplesPerProbe < opt.bake.samplesPerProbe)
-    throw UsageError("--max-samples must be at least --samples");
-  if (opt.bake.threads < 0) throw UsageError("--threads must be >= 0");
-  const std::string content = args.str("--content");
-  if (content == "default")
-    opt.bake.content = kContentDefault;
-  else if (content == "all")
-    opt.bake.content = kContentAll;
-  else
-    throw UsageError("--content must be 'default' or 'all', not '" + content + "'");
-
-  if (!parseOcclusionMode(args.str("--occlusion"), opt.occlusion.mode))
-    throw UsageError("--occlusion must be auto, none, planes or shadow-maps, not '" +
-                     args.str("--occlusion") + "'");
-  opt.occlusion.minAgreement = args.number("--min-agreement");
-  opt.holeRounds = args.integer("--fill-holes");
-  if (args.str("--hole-rule") != "all" && args.str("--hole-rule") != "unseen")
-    throw UsageError("--hole-rule must be all or unseen, not '" + args.str("--hole-rule") + "'");
-  opt.holesOnlyUnseen = args.str("--hole-rule") == "unseen";
-  opt.probeBudget = args.str("--probe-budget") == "auto" ? -1 : args.integer("--probe-budget");
-  opt.refinePoints = args.integer("--refine-points");
-  if (opt.probeBudget < -1) throw UsageError("--probe-budget must be auto or >= 0");
-  if (opt.refinePoints < 1) throw UsageError("--refine-points must be >= 1");
-  if (args.str("--refine-offset") != "auto") {
-    opt.refineOffset = args.number("--refine-offset");
-    if (!(opt.refineOffset > 0.0) || !std::isfinite(opt.refineOffset))
-      throw UsageError("--refine-offset must be auto or a positive number of metres");
-  }
-  if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
-  if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
-    throw UsageError("--min-agreement must be in [0, 1]");
+  PipelineOptions opt = pipelineOptionsFromArgs(args);
+  const bool spacingAuto = !(opt.spacing > 0.0);  // resolved from the scene once it is loaded
+  const std::string dering = args.str("--dering"), content = args.str("--content");
 
   // Sharding: every option that can change the level, canonical, so the merge can check the shards agree
   // and bake with the same options (output, report, threads and the shard itself never change it).
   std::string canonical = scenePath + "\n";
   for (const auto& [name, value] : args.values()) {
     if (name == "--output" || name == "--report" || name == "--threads" || name == "--shard" ||
-        name == "--round" || name == "--floor" || name == "--resume")
+        name == "--round" || name == "--floor" || name == "--resume" || name == "--options-from")
       continue;
     if (value.find('\n') != std::string::npos) throw UsageError(name + " holds a line break");
     canonical += name + "=" + value + "\n";

@@ -17,6 +17,7 @@
 #include "eval_plot.h"
 #include "image_compare.h"
 #include "pipeline.h"
+#include "pipeline_options.h"
 #include "render_view.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
@@ -137,13 +138,16 @@ LevelUnderTest prepareLevel(std::shared_ptr<Level> level, const EvalSetup& setup
   if (setup.built) out.candidates.push_back({occlusionMethod(*level, setup.built), {}});
 
   if (setup.equalBytesGrid || setup.probeCountGrid) {
-    const LevelBakeSettings settings = bakeSettingsFromGenerator(level->generator, level->content);
+    std::vector<std::string> recorded;
+    const PipelineOptions settings = pipelineOptionsFromGenerator(level->generator, &recorded);
     BakeOptions bake = settings.bake;
+    bake.content = level->content;  // what the level holds, whatever its text says
     bake.threads = setup.threads;
+    bake.progress = false;
     glm::vec3 slo, shi;
     sceneBounds(*setup.scene, slo, shi);
     std::string found;
-    for (const std::string& k : settings.found) found += (found.empty() ? "" : ",") + k;
+    for (const std::string& k : recorded) found += (found.empty() ? "" : ",") + k;
     std::ostringstream note;
     note << "grid bake settings from the level's generator (" << (found.empty() ? "none found" : found)
          << "): samples " << bake.samplesPerProbe << ", noise " << bake.targetRelError << ", max "
@@ -307,26 +311,22 @@ std::vector<double> parseSweep(const std::string& text) {
   return out;
 }
 
-// The bake pipeline's options for a re-bake at `spacing`: `tetraprobe bake`'s defaults with the level's own
-// bake, dering and occlusion settings as far as its generator string records them.
+// The bake pipeline's options for a re-bake at `spacing`: the options the level was baked with, as its
+// generator string records them (pipelineOptionsFromGenerator: `tetraprobe bake`'s defaults for any it does
+// not), at this spacing. A level of user or imported probes re-bakes with automatic placement (the files are
+// not at hand), voxel unless it was a grid; the coarsest cell grows to the spacing when smaller.
 PipelineOptions sweepOptions(const Level& level, double spacing, int threads) {
-  PipelineOptions opt;
-  const LevelBakeSettings settings = bakeSettingsFromGenerator(level.generator, level.content);
-  opt.bake = settings.bake;
+  PipelineOptions opt = pipelineOptionsFromGenerator(level.generator);
+  if (!opt.probesCsv.empty() || !opt.importShCsv.empty()) {
+    opt.probesCsv.clear();
+    opt.importShCsv.clear();
+    if (opt.placement == "none") opt.placement = "voxel";
+  }
+  if (level.content == kContentDefault || level.content == kContentAll) opt.bake.content = level.content;
   opt.bake.threads = threads;
   opt.bake.progress = false;
-  opt.dering = settings.dering;
   opt.spacing = spacing;
-  opt.maxSpacing = std::max(10.0, spacing);
-  opt.occlusion.mode = OcclusionMode::kAuto;
-  opt.occlusion.minAgreement = 0.98;
-  for (const auto& [key, value] : generatorFields(level.generator)) {
-    if (key == "occlusion") parseOcclusionMode(value, opt.occlusion.mode);
-    if (key == "min_agreement") opt.occlusion.minAgreement = std::atof(value.c_str());
-    if (key == "hole_rounds") opt.holeRounds = std::atoi(value.c_str());
-    if (key == "hole_rule") opt.holesOnlyUnseen = value == "unseen";
-    if (key == "tetra" && (value == "cgal" || value == "tetgen")) opt.tetra = value;
-  }
+  opt.maxSpacing = std::max(opt.maxSpacing, spacing);
   return opt;
 }
 

@@ -11,6 +11,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "pipeline_options.h"
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
@@ -40,18 +41,6 @@ class StageTimer {
   PipelineStats& stats_;
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
-
-std::string contentName(uint32_t content) {
-  return content == kContentAll ? "all" : "default";
-}
-
-std::string deringName(const DeringOptions& d) {
-  if (d.mode == DeringMode::kNone) return "none";
-  if (d.mode == DeringMode::kAuto) return "auto";
-  std::ostringstream s;
-  s << d.strength;
-  return s.str();
-}
 
 // Clearance of probe positions (tetra/placement.h) from 64 rays of a fixed spherical Fibonacci set each:
 // hits and back-face hits for insideByRays(), escape = mean direction of rays that escaped or hit a front
@@ -109,7 +98,9 @@ double autoSpacing(const Scene& scene) {
   return spacing;
 }
 
-Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats) {
+Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats& stats) {
+  PipelineOptions options = given;
+  if (!(options.spacing > 0.0)) options.spacing = autoSpacing(scene);
   StageTimer timer(stats);
   SceneTracer tracer(scene);
   timer.mark("bvh");
@@ -436,26 +427,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineSta
 
   if (kinds.size() == level.probes.size()) level.probeKinds = std::move(kinds);
 
-  std::ostringstream gen;
-  gen << "tetraprobe 0.1.0 bake; placement="
-      << (!options.importShCsv.empty()  ? "imported"
-          : options.placement == "none" ? "user"
-                                        : options.placement)
-      << "; tetra=" << options.tetra << "; spacing=" << options.spacing << "; shell_spacing="
-      << (options.placement != "voxel" ? 0.0
-          : options.shellSpacing < 0.0 ? options.spacing
-                                       : options.shellSpacing)
-      << "; bounces=" << options.bake.bounces << "; samples=" << options.bake.samplesPerProbe
-      << "; target_error=" << options.bake.targetRelError
-      << "; max_samples=" << options.bake.maxSamplesPerProbe << "; path_budget=" << options.bake.pathBudget
-      << "; content=" << contentName(options.bake.content) << "; seed=" << options.bake.seed
-      << "; sh_order=" << options.bake.shOrder << "; dering=" << deringName(options.dering)
-      << "; occlusion=" << occlusionModeName(options.occlusion.mode)
-      << "; hole_rounds=" << options.holeRounds;
-  if (options.holesOnlyUnseen) gen << "; hole_rule=unseen";
-  if (options.occlusion.mode == OcclusionMode::kAuto)
-    gen << "; min_agreement=" << options.occlusion.minAgreement;
-  level.generator = gen.str();
+  level.generator = generatorString(options);
   return level;
 }
 

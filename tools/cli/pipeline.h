@@ -15,12 +15,30 @@
 
 namespace tetraprobe::cli {
 
+// Every option of a bake. The default member values are `tetraprobe bake`'s defaults, stated here only: the
+// CLI's option table and --help (pipeline_options.h), `eval --sweep` and the level's generator string all
+// start from a default-constructed PipelineOptions. (The library structs inside keep their own defaults for
+// their other callers; those the bake changes are set below.)
 struct PipelineOptions {
-  double spacing = 1.0;     // finest voxel / grid spacing, metres
+  double spacing = 0.0;     // finest voxel / grid spacing, metres; <= 0: auto (autoSpacing(scene))
   std::string probesCsv;    // user probes (kept exactly; never moved or merged away)
   std::string importShCsv;  // probes and their SH from another baker (bake/sh_csv.h); no path tracing
-  BakeOptions bake;         // bake.shOrder 1 also truncates imported SH
-  DeringOptions dering;     // applied to baked and imported SH alike
+  // bake.shOrder 1 also truncates imported SH. Adaptive sampling to 2 % noise (at least 256, at most 8192
+  // paths a probe, unbounded bounces), a 16M-path budget for the whole bake, default content, L2, seed 1.
+  BakeOptions bake = [] {
+    BakeOptions b;
+    b.bounces = kUnboundedBounces;
+    b.samplesPerProbe = 256;
+    b.targetRelError = 0.02;
+    b.maxSamplesPerProbe = 8192;
+    b.pathBudget = 16000000;
+    b.content = kContentDefault;
+    b.seed = 1;
+    b.shOrder = 2;
+    b.threads = 0;
+    return b;
+  }();
+  DeringOptions dering;  // auto; applied to baked and imported SH alike
 
   // Placement (tetra/placement.h): "voxel" (adaptive voxels + push-out + merge + fillers; the default),
   // "grid" (regular grid, inside probes rejected; for comparison), "none" (user probes only).
@@ -28,24 +46,33 @@ struct PipelineOptions {
   double maxSpacing = 10.0;    // voxel: coarsest open-space cell, metres
   double fillerSpacing = 4.0;  // voxel: open-space filler lattice, metres (0 = none)
   // voxel: shell probes (tetra/placement.h, placeShellProbes) on the level's bounds grown outward, at this
-  // step in metres; < 0 = the spacing, 0 = none. Shell probes that fail the inside rule are dilated.
+  // step in metres; < 0 = auto (the spacing), 0 = none. Shell probes that fail the inside rule are dilated.
   double shellSpacing = -1.0;
   std::string tetra = "cgal";  // "cgal" | "tetgen"
 
   // Per-tet occlusion against light leaking, built after the SH bake and stored in the level
   // (occlusion/build_occlusion.h). occlusion.mode kNone stores nothing; threads and progress follow `bake`.
-  OcclusionOptions occlusion;
+  // Auto, and auto takes the cheapest representation that answers 98 % of the sampled rays alike.
+  OcclusionOptions occlusion = [] {
+    OcclusionOptions o;
+    o.mode = OcclusionMode::kAuto;
+    o.minAgreement = 0.98;
+    return o;
+  }();
   // Rounds of occlusion-hole filling (occlusion/occlusion_holes.h) after the occlusion stage: surface points
   // that see none of their tet's probes get a probe in front of them, then the level is tetrahedralized,
-  // baked (new probes only) and occluded again. 0 = none; needs occlusion. Not for imported SH.
-  int holeRounds = 1;
+  // baked (new probes only) and occluded again; stops early when none are left. 0 = none; needs occlusion.
+  // Not for imported SH. With user probes alone (placement "none") the CLI makes it 0 unless given
+  // (pipeline_options.h).
+  int holeRounds = 3;
   bool holesOnlyUnseen = false;  // OcclusionHoleOptions::onlyUnseen (--hole-rule unseen)
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
-  // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 = 10 %
-  // of the probes that are not shell probes.
-  int probeBudget = 0;
+  // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 =
+  // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone
+  // (placement "none") the CLI makes it 0 unless given (pipeline_options.h).
+  int probeBudget = -1;
   int refinePoints = 2048;
-  // How far in front of its surface point a refinement probe sits at most, metres; <= 0: spacing x
+  // How far in front of its surface point a refinement probe sits at most, metres; <= 0: auto, spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;
 
@@ -108,8 +135,9 @@ double autoSpacing(const Scene& scene);
 // The largest extent of `scene`'s bounds (sceneBounds), in metres; 0 without triangles.
 double sceneLargestExtent(const Scene& scene);
 
-// Runs every stage on a loaded scene. Throws InputError when the input cannot give a level (e.g. fewer than
-// four probes survive placement).
+// Runs every stage on a loaded scene (an automatic spacing resolved first, autoSpacing) and records the
+// options in Level::generator (generatorString, pipeline_options.h). Throws InputError when the input cannot
+// give a level (e.g. fewer than four probes survive placement).
 Level buildLevel(const Scene& scene, const PipelineOptions& options, PipelineStats& stats);
 
 }  // namespace tetraprobe::cli

@@ -93,21 +93,12 @@ struct GridBakeStats {
 GridVolume bakeGridVolume(const SceneTracer& tracer, const GridLayout& layout, const BakeOptions& bake,
                           const DeringOptions& dering, GridBakeStats* stats = nullptr);
 
-// The bake settings a level was made with, read from its generator string (Level::generator, written by the
-// bake pipeline as "key=value" pairs separated by "; "): bounces, samples, target_error, max_samples,
-// path_budget, seed, sh_order and dering. Keys that are missing keep `tetraprobe bake`'s defaults (unbounded
-// bounces, 256 samples, noise 0.02, at most 8192, seed 1, L2, dering auto), except path_budget, which levels
-// baked before it existed did not have (0); `found` lists the keys that were read.
-// content is taken from `content` (the level's stored flags), never from the text.
-struct LevelBakeSettings {
-  BakeOptions bake;
-  DeringOptions dering;
-  std::vector<std::string> found;
-};
-LevelBakeSettings bakeSettingsFromGenerator(const std::string& generator, uint32_t content);
-
-// The generator string's `key=value` items in order (items separated by ';', keys trimmed of leading
-// spaces; items without '=' skipped). The text is free-form: this is the one place that splits it.
+// The generator string's `key=value` items in order (Level::generator). Two forms: `tetraprobe bake`'s,
+// "tetraprobe 0.1.0 bake --spacing=1 --placement=voxel ..." (items separated by spaces; keys are the option
+// names, "--spacing"), and the earlier "tetraprobe 0.1.0 bake; placement=voxel; spacing=1; ..." (items
+// separated by ';', keys trimmed of spaces; a text holding " --" is the first form). Items without '=' are
+// skipped. The text is free-form: this is the one place that splits it (tools/cli/pipeline_options.h reads
+// the options back).
 std::vector<std::pair<std::string, std::string>> generatorFields(const std::string& generator);
 
 }  // namespace tetraprobe
