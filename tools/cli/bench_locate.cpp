@@ -151,7 +151,7 @@ int benchLocate(int argc, char** argv) {
   int threads = args.integer("--threads");
   const int bruteCount = args.integer("--brute");
   const auto cellSize = float(args.number("--cell-size"));
-  const auto seed = uint64_t(args.number("--seed"));
+  const auto seed = args.u64("--seed");
   if (queryCount < 1) throw UsageError("--queries must be at least 1");
   if (order != "random" && order != "coherent") throw UsageError("--order must be random or coherent");
   if (threads < 0) throw UsageError("--threads must be >= 0");

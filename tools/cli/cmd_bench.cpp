@@ -72,7 +72,7 @@ int benchBake(int argc, char** argv) {
   bake.samplesPerProbe = args.integer("--samples");
   bake.bounces = args.bounces("--bounces");
   bake.threads = args.integer("--threads");
-  bake.seed = uint64_t(args.number("--seed"));
+  bake.seed = args.u64("--seed");
   bake.progress = false;
   if (probeCount < 1) throw UsageError("--probes must be at least 1");
   if (bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");

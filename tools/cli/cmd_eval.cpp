@@ -394,7 +394,7 @@ int cmdEval(int argc, char** argv) {
   opt.points = args.integer("--points");
   opt.samplesPerPoint = args.integer("--samples");
   opt.referenceBounces = args.bounces("--bounces");
-  opt.seed = uint64_t(args.number("--seed"));
+  opt.seed = args.u64("--seed");
   opt.threads = args.integer("--threads");
   if (opt.points < 1 || opt.samplesPerPoint < 1 || opt.threads < 0)
     throw UsageError("--points and --samples must be >= 1, --threads >= 0");

@@ -107,7 +107,7 @@ int cmdReference(int argc, char** argv) {
     bake.content = kContentAll;
   else
     throw UsageError("--content must be 'default' or 'all', not '" + content + "'");
-  const uint64_t seed = uint64_t(args.number("--seed"));
+  const uint64_t seed = args.u64("--seed");
 
   const std::vector<RefPoint> points = readPoints(args.str("--points"));
   const Scene scene = loadScene(args.positional()[0]);

@@ -68,7 +68,7 @@ void renderTraced(const Args& args, const Scene& scene, const Level& level, cons
   opt.maxSeconds = args.number("--max-seconds");
   opt.bounces = parseBounces(args.str("--bounces"));
   opt.content = level.content;
-  opt.seed = uint64_t(args.number("--seed"));
+  opt.seed = args.u64("--seed");
   opt.threads = args.integer("--threads");
   if (opt.samplesPerPixel < 1) throw UsageError("--samples must be at least 1");
   if (!(opt.maxSeconds >= 0.0)) throw UsageError("--max-seconds must be >= 0");
