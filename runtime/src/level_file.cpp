@@ -13,6 +13,7 @@
 #include "tetraprobe/runtime/sh.h"
 #include "tetraprobe/runtime/sh_half.h"
 
+#include "byte_order.h"
 #include "stream_format.h"
 
 namespace tetraprobe {
@@ -31,17 +32,9 @@ constexpr uint64_t kMinTetBytes = 2;       // TETM: two control bytes a tet at l
 constexpr uint64_t kOuterCellBytes = 80;   // OUTC (read only)
 static_assert(kShBytes == sizeof(ShRgb) && kShHalfBytes == sizeof(ShHalf) && kTetBytes == sizeof(Tet));
 
-uint32_t u32At(const uint8_t* p) {
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= uint32_t(p[i]) << (8 * i);
-  return v;
-}
-uint64_t u64At(const uint8_t* p) {
-  return uint64_t(u32At(p)) | uint64_t(u32At(p + 4)) << 32;
-}
-void putU32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
-}
+using runtime_detail::putU32;
+using runtime_detail::u32At;
+using runtime_detail::u64At;
 
 LevelResult fail(LevelStatus status, std::string message) {
   return {status, std::move(message)};

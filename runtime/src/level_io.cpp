@@ -34,7 +34,6 @@ constexpr uint64_t kHeaderBytes = kLevelHeaderBytes;
 constexpr uint64_t kHeaderCrcOffset = kLevelHeaderCrcAt;
 constexpr uint64_t kSectionEntryBytes = kLevelSectionEntryBytes;
 constexpr uint32_t kSectionRequired = kLevelSectionRequired;
-constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
 constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficients x RGB f32
 constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
 constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // TETS (read only): v[4] i32, n[4] i32

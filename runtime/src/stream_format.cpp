@@ -4,6 +4,8 @@
 // sections, so a sector is checked when it is loaded and the file is never read end to end.
 #include "stream_format.h"
 
+#include "byte_order.h"
+
 #include <algorithm>
 #include <bit>
 #include <climits>
@@ -21,18 +23,6 @@ namespace {
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);
 constexpr uint64_t kMaxRefs = uint64_t(1) << 36;
 constexpr uint64_t kOcclusionHeaderBytes = 24, kOcclusionRecordBytes = 8, kOcclusionPlaneBytes = 8;
-
-uint32_t u32At(const uint8_t* p) {
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= uint32_t(p[i]) << (8 * i);
-  return v;
-}
-uint64_t u64At(const uint8_t* p) {
-  return uint64_t(u32At(p)) | uint64_t(u32At(p + 4)) << 32;
-}
-void putU32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
-}
 
 // Reads `n` bytes at `at` onto the end of `out`.
 bool append(ByteSource& src, uint64_t at, size_t n, std::vector<uint8_t>& out) {

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "byte_order.h"
 #include "stream_format.h"
 
 namespace tetraprobe {
@@ -28,21 +29,14 @@ namespace {
 using runtime_detail::StreamHeader;
 using runtime_detail::StreamSector;
 
-uint32_t u32At(const uint8_t* p) {
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= uint32_t(p[i]) << (8 * i);
-  return v;
-}
+using runtime_detail::f32At;
+using runtime_detail::i32At;
+using runtime_detail::u32At;
+
 uint32_t uintAt(const uint8_t* p, uint64_t bytes) {  // little-endian, 1..4 bytes
   uint32_t v = 0;
   for (uint64_t b = 0; b < bytes; ++b) v |= uint32_t(p[b]) << (8 * b);
   return v;
-}
-int32_t i32At(const uint8_t* p) {
-  return int32_t(u32At(p));
-}
-float f32At(const uint8_t* p) {
-  return std::bit_cast<float>(u32At(p));
 }
 
 LevelResult fail(LevelStatus s, std::string message) {

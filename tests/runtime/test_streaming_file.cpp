@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../cli/level_bytes.h"  // little-endian fields of a level file
 #include "test_levels.h"
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/crc32.h"
@@ -25,7 +26,10 @@ namespace tetraprobe {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<uint8_t>;
+using test::Bytes;
+using test::getU32;
+using test::getU64;
+using test::putU32;
 
 class StreamingFile : public ::testing::Test {
  protected:
@@ -58,21 +62,10 @@ class StreamingFile : public ::testing::Test {
         .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
     return path(name);
   }
-  static uint32_t u32(const Bytes& b, size_t at) {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= uint32_t(b[at + size_t(i)]) << (8 * i);
-    return v;
-  }
-  static uint64_t u64(const Bytes& b, size_t at) {
-    return uint64_t(u32(b, at)) | uint64_t(u32(b, at + 4)) << 32;
-  }
-  static void put32(Bytes& b, size_t at, uint32_t v) {
-    for (int i = 0; i < 4; ++i) b[at + size_t(i)] = uint8_t(v >> (8 * i));
-  }
   // The table entry (its byte offset) of the section tagged `tag`.
   static size_t entry(const Bytes& b, const char (&tag)[5]) {
-    for (uint32_t i = 0; i < u32(b, 72); ++i)
-      if (u32(b, 80 + 24 * size_t(i)) == levelTag(tag)) return 80 + 24 * size_t(i);
+    for (uint32_t i = 0; i < getU32(b, 72); ++i)
+      if (getU32(b, 80 + 24 * size_t(i)) == levelTag(tag)) return 80 + 24 * size_t(i);
     ADD_FAILURE() << "no section " << tag;
     return 0;
   }
@@ -125,11 +118,11 @@ TEST_F(StreamingFile, SealedIndexLoadsThroughBothLoadersAndResavesIdentically) {
 TEST_F(StreamingFile, OpenReadsOnlyTheFramingAndTheIndex) {
   StreamingLevel st;
   ASSERT_TRUE(st.open(path("streamed.tpb")));
-  const size_t strm = size_t(u64(bytes_, entry(bytes_, "STRM") + 8));
-  const uint64_t sectors = u32(bytes_, strm + 4), coarseProbes = u32(bytes_, strm + 48),
-                 coarseTets = u32(bytes_, strm + 52);
-  const uint64_t expected =
-      80 + 24 * uint64_t(u32(bytes_, 72)) + 4 + 24 + 64 + 44 * sectors + 120 * coarseProbes + 32 * coarseTets;
+  const size_t strm = size_t(getU64(bytes_, entry(bytes_, "STRM") + 8));
+  const uint64_t sectors = getU32(bytes_, strm + 4), coarseProbes = getU32(bytes_, strm + 48),
+                 coarseTets = getU32(bytes_, strm + 52);
+  const uint64_t expected = 80 + 24 * uint64_t(getU32(bytes_, 72)) + 4 + 24 + 64 + 44 * sectors +
+                            120 * coarseProbes + 32 * coarseTets;
   EXPECT_EQ(st.bytesReadAtOpen(), expected);
   EXPECT_EQ(sectors, st.sectors().size());
   EXPECT_LT(st.bytesReadAtOpen(), bytes_.size() / 4) << "file " << bytes_.size() << " bytes";
@@ -140,9 +133,9 @@ TEST_F(StreamingFile, OpenReadsOnlyTheFramingAndTheIndex) {
 // loaded, the others load; loadLevel refuses the file naming a sector's checksum.
 TEST_F(StreamingFile, DamagedSectorIsRefusedByItsChecksumWhenLoaded) {
   Bytes b = bytes_;
-  const size_t prbs = size_t(u64(b, entry(b, "PRBS") + 8));
+  const size_t prbs = size_t(getU64(b, entry(b, "PRBS") + 8));
   b[prbs + 12 * 7 + 2] ^= 0x10;  // probe 7's x
-  put32(b, b.size() - 4, crc32(b.data() + 80, b.size() - 84));
+  putU32(b, b.size() - 4, crc32(b.data() + 80, b.size() - 84));
   const std::string file = write("damaged.tpb", b);
   Level whole;
   const LevelResult a = loadLevel(file, whole);
@@ -174,7 +167,7 @@ TEST_F(StreamingFile, DamagedSectorIsRefusedByItsChecksumWhenLoaded) {
 TEST_F(StreamingFile, OlderVersionIsRefusedNamingBothVersions) {
   ASSERT_EQ(kLevelFormatVersion, 5u);
   Bytes b = bytes_;
-  put32(b, 8, 4);
+  putU32(b, 8, 4);
   recomputeLevelChecksums(b.data(), b.size());
   expectBothRefuse(write("v4.tpb", b), LevelStatus::kUnsupportedVersion,
                    "format version 4 (this reader understands version 5");
@@ -185,22 +178,22 @@ TEST_F(StreamingFile, OlderVersionIsRefusedNamingBothVersions) {
 TEST_F(StreamingFile, TableIsCheckedAsLoadLevelChecksIt) {
   const size_t grid = entry(bytes_, "CGR4");
   Bytes flags = bytes_;
-  put32(flags, grid + 4, 2);
+  putU32(flags, grid + 4, 2);
   recomputeLevelChecksums(flags.data(), flags.size());
   expectBothRefuse(write("flags.tpb", flags), LevelStatus::kCorrupt, "bad flags, offset or size");
   Bytes repeated = bytes_;
-  put32(repeated, grid, levelTag("PRBS"));
+  putU32(repeated, grid, levelTag("PRBS"));
   recomputeLevelChecksums(repeated.data(), repeated.size());
   expectBothRefuse(write("repeated.tpb", repeated), LevelStatus::kCorrupt, "repeated section tag");
   Bytes unknown = bytes_;
-  put32(unknown, grid, levelTag("ZZZZ"));
-  put32(unknown, grid + 4, kLevelSectionRequired);
+  putU32(unknown, grid, levelTag("ZZZZ"));
+  putU32(unknown, grid + 4, kLevelSectionRequired);
   recomputeLevelChecksums(unknown.data(), unknown.size());
   expectBothRefuse(write("unknown.tpb", unknown), LevelStatus::kUnsupportedVersion,
                    "unknown required section tag");
   // An unknown optional tag is skipped by both (the grid section renamed: the index does not need it).
   Bytes optional = bytes_;
-  put32(optional, grid, levelTag("ZZZZ"));
+  putU32(optional, grid, levelTag("ZZZZ"));
   recomputeLevelChecksums(optional.data(), optional.size());
   Level whole;
   EXPECT_TRUE(loadLevel(write("optional.tpb", optional), whole));
@@ -213,7 +206,7 @@ TEST_F(StreamingFile, TableIsCheckedAsLoadLevelChecksIt) {
 // the file.
 TEST_F(StreamingFile, ZeroOcclusionPlaneIsRefusedByBothLoaders) {
   Bytes b = bytes_;
-  const size_t occl = size_t(u64(b, entry(b, "OCCL") + 8));
+  const size_t occl = size_t(getU64(b, entry(b, "OCCL") + 8));
   const size_t plane = occl + 24 + 8 * level_.tets.size();
   std::memset(&b[plane], 0, 8);
   recomputeLevelChecksums(b.data(), b.size());
