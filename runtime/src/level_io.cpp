@@ -1,10 +1,12 @@
 // The `.tpb` level file: explicit little-endian serialisation, field by field, and a loader that is safe on
 // untrusted input (parse -> validate -> hand out, in the manner of cgltf). The byte layout, the field table
-// and the version policy are in docs/level_format.md; the constants below are the single source of truth.
+// and the version policy are in docs/level_format.md; the header and the section table are parsed and
+// checked by level_file.h (shared with StreamingLevel and inspect), the sections' own layouts here.
 //
 // Integrity: a CRC-32 over the header (checked before any count is trusted) and a CRC-32 over everything
-// after it; then every count is checked against the file size before anything is allocated, and every index
-// and number is validated (validateLevel) before the level is handed out.
+// after it (and, in a streamed level, the index's and each sector's: stream_format.h); then every count is
+// checked against the file size before anything is allocated, and every index and number is validated
+// (validateLevel) before the level is handed out.
 #include <algorithm>
 #include <array>
 #include <bit>

@@ -1,6 +1,8 @@
-// Streaming a level by sector (streaming.h, docs/streaming.md): open checks the file and reads the STRM
-// index and the coarse probe set; load reads one sector's records (tets, their probes and SH, occlusion,
-// the cell's BSP) with seeks into the level's own sections; the loaded sectors are joined into one small
+// Streaming a level by sector (streaming.h, docs/streaming.md): open checks the header and table (the
+// parser loadLevel uses, level_file.h) and reads the STRM index and the coarse probe set under the index's
+// CRC; load reads one sector's records (tets, their probes and SH, occlusion, the cell's BSP) with seeks
+// into the level's own sections and checks them against the sector's CRC (stream_format.h); the loaded
+// sectors are joined into one small
 // Level (indices renumbered, neighbours outside it cut to -1, the loaded cells' BSPs under a new hash table)
 // and queried by an ordinary ProbeQuery. Where a point's cell is loaded and the point lies in a tet, that
 // tet, the cell's BSP leaf's tet, the neighbours the walk steps to, their probes and occlusion are all
