@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "tetraprobe/runtime/crc32.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/outer_cells.h"
@@ -41,14 +42,6 @@ uint64_t getU(const std::vector<char>& b, size_t at, int n) {
 }
 void putU(std::vector<char>& b, size_t at, uint64_t v, int n) {
   for (int i = 0; i < n; ++i) b[at + size_t(i)] = char(uint8_t(v >> (8 * i)));
-}
-uint32_t crc32(const char* p, size_t n) {  // the format's CRC-32 (zlib)
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) {
-    c ^= uint8_t(p[i]);
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-  }
-  return c ^ 0xFFFFFFFFu;
 }
 
 template <class T>

@@ -1,10 +1,12 @@
 // The `.tpb` level file: explicit little-endian serialisation, field by field, and a loader that is safe on
 // untrusted input (parse -> validate -> hand out, in the manner of cgltf). The byte layout, the field table
-// and the version policy are in docs/level_format.md; the constants below are the single source of truth.
+// and the version policy are in docs/level_format.md; the header and the section table are parsed and
+// checked by level_file.h (shared with StreamingLevel and inspect), the sections' own layouts here.
 //
 // Integrity: a CRC-32 over the header (checked before any count is trusted) and a CRC-32 over everything
-// after it; then every count is checked against the file size before anything is allocated, and every index
-// and number is validated (validateLevel) before the level is handed out.
+// after it (and, in a streamed level, the index's and each sector's: stream_format.h); then every count is
+// checked against the file size before anything is allocated, and every index and number is validated
+// (validateLevel) before the level is handed out.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -14,34 +16,31 @@
 #include <string>
 #include <utility>
 
+#include "tetraprobe/runtime/crc32.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/level_file.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/tet_adjacency.h"
 
 #include "bsp_codec.h"
-#include "crc32.h"
+#include "stream_format.h"
 #include "tet_codec.h"
 
 namespace tetraprobe {
 namespace {
 
-constexpr std::array<uint8_t, 8> kMagic = {0x89, 'T', 'P', 'B', '\r', '\n', 0x1A, '\n'};
+// The header, the table and their checks: level_file.h (one parser for every reader).
 constexpr uint32_t kVersion = kLevelFormatVersion;
-constexpr uint32_t kHeaderBytes = 80;
-constexpr uint32_t kHeaderCrcOffset = 76;    // CRC-32 of header bytes [0, 76)
-constexpr uint64_t kSectionEntryBytes = 24;  // tag u32, flags u32, offset u64, size u64
-constexpr uint32_t kMaxSections = 64;
-constexpr uint64_t kMaxSectionBytes = uint64_t(1) << 40;  // bounds every size sum below 2^47
-constexpr uint32_t kSectionRequired = 1u;      // flags: a reader that does not know the tag must refuse
-constexpr uint64_t kProbeBytes = 3 * 4;        // position: 3 x f32
+constexpr uint64_t kHeaderBytes = kLevelHeaderBytes;
+constexpr uint64_t kHeaderCrcOffset = kLevelHeaderCrcAt;
+constexpr uint64_t kSectionEntryBytes = kLevelSectionEntryBytes;
+constexpr uint32_t kSectionRequired = kLevelSectionRequired;
 constexpr uint64_t kShBytes = 27 * 4;          // SHRG (read only): 9 coefficients x RGB f32
 constexpr uint64_t kShHalfBytes = 28 * 2;      // SHRH: 27 binary16 coefficients + binary16 scale
 constexpr uint64_t kTetBytes = 4 * 4 + 4 * 4;  // TETS (read only): v[4] i32, n[4] i32
 // TETC: v[4], each levelProbeIndexBytes(P) bytes (2, 3 or 4; neighbours derived on load).
-// TETM: two control bytes a tet and a varint for each probe not among the last 15 named (tet_codec.h); its
-// two bytes a tet are the least any tet section takes.
-constexpr uint64_t kMinTetBytes = 2;
+// TETM: two control bytes a tet and a varint for each probe not among the last 15 named (tet_codec.h).
 constexpr uint64_t kOuterCellBytes = 3 * 4 + 4 + 3 * 4 + 4 + 9 * 4 + 12;  // v, tet, n, face, normals, pad
 constexpr uint64_t kTrailerBytes = 4;                // CRC-32 of bytes [kHeaderBytes, size - 4)
 constexpr uint64_t kMaxCount = uint64_t(INT32_MAX);  // probe and tet indices are int32
@@ -56,16 +55,13 @@ static_assert(kShHalfBytes == sizeof(ShHalf), "the file's SH record is the 56-by
 static_assert(kOuterCellBytes == sizeof(OuterCell),
               "the old outer cell record (OUTC, read only) is the 80-byte OuterCell");
 
-// Section tags: four ASCII characters, read as a little-endian u32.
-constexpr uint32_t tag(const char (&s)[5]) {
-  return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 |
-         uint32_t(uint8_t(s[3])) << 24;
-}
-constexpr uint32_t kTagProbes = tag("PRBS"), kTagSh = tag("SHRG"), kTagShHalf = tag("SHRH"),
-                   kTagTets = tag("TETS"), kTagTetsCompact = tag("TETC"), kTagTetsPacked = tag("TETM"),
-                   kTagGenerator = tag("GENR"), kTagOuterCells = tag("OUTC"), kTagCellGrid = tag("CGR2"),
-                   kTagCellGridPacked = tag("CGR4"), kTagOcclusion = tag("OCCL"),
-                   kTagOcclusionPacked = tag("OCC2"), kTagProbeKinds = tag("KIND"), kTagStream = tag("STRM");
+// Section tags as saveLevel writes them (level_file.h).
+constexpr uint32_t kTagProbes = levelTag("PRBS"), kTagShHalf = levelTag("SHRH"),
+                   kTagTetsCompact = levelTag("TETC"), kTagTetsPacked = levelTag("TETM"),
+                   kTagGenerator = levelTag("GENR"), kTagCellGrid = levelTag("CGR2"),
+                   kTagCellGridPacked = levelTag("CGR4"), kTagOcclusion = levelTag("OCCL"),
+                   kTagOcclusionPacked = levelTag("OCC2"), kTagProbeKinds = levelTag("KIND"),
+                   kTagStream = levelTag("STRM");
 constexpr uint64_t kOcclusionHeaderBytes = 24;  // tet, plane and shadow-map block counts (u64 each)
 constexpr uint64_t kTetOcclusionBytes = 8, kOcclusionPlaneBytes = 8;  // plane: 4 x snorm16
 // OCC2: the counts and the cell-mask byte count (u64 each), then a code byte per tet (kind | plane count << 2)
@@ -133,8 +129,6 @@ bool nodeFaces(const Level& level, std::vector<uint32_t>& out) {
   }
   return true;
 }
-
-using runtime_detail::crc32;  // crc32.h
 
 // --- writing ---------------------------------------------------------------------------------------------
 class Writer {
@@ -574,7 +568,7 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   }
 
   Writer w;
-  w.bytes(kMagic.data(), kMagic.size());
+  w.bytes(kLevelMagic, sizeof kLevelMagic);
   w.u32(kVersion);
   w.u32(kHeaderBytes);
   w.u32(level.content);
@@ -597,7 +591,23 @@ LevelResult saveLevel(const std::string& path, const Level& level) {
   }
   w.u32(w.crcOf(kHeaderBytes, w.str().size()));
   for (Section& sec : sections) w.bytes(sec.bytes.str().data(), sec.bytes.str().size());
-  w.u32(w.crcOf(kHeaderBytes, w.str().size()));
+  w.u32(0);
+  if (!level.stream.empty()) {
+    // The streaming index's checksums (its own and each sector's, over the records as written above:
+    // stream_format.h), computed by the reader StreamingLevel uses; an index it cannot read is refused.
+    auto* bytes = reinterpret_cast<uint8_t*>(w.str().data());
+    LevelFileLayout layout;
+    std::string e;
+    if (LevelResult r = parseLevelHeader(bytes, w.str().size(), path, layout); !r)
+      e = r.message;
+    else if (LevelResult t = parseLevelTable(bytes + kHeaderBytes, w.str().size(), path, layout); !t)
+      e = t.message;
+    else
+      e = runtime_detail::sealStreamIndex(bytes, w.str().size(), layout, runtime_detail::StreamSeal::kAll);
+    if (!e.empty())
+      return fail(LevelStatus::kWriteFailed, path + ": refusing to write an invalid streaming index: " + e);
+  }
+  w.patchU32(w.str().size() - kTrailerBytes, w.crcOf(kHeaderBytes, w.str().size() - kTrailerBytes));
   std::string error;
   if (!writeFileAtomic(path, w.str(), &error)) return fail(LevelStatus::kWriteFailed, error);
   return {};
@@ -610,148 +620,34 @@ namespace {
 LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& path, Level& out) {
   const std::string name = path + ": ";
 
-  // Magic (a prefix of it in a short file means truncated, anything else is not a level), then version.
-  if (size > 0 && std::memcmp(data, kMagic.data(), size_t(std::min<uint64_t>(size, kMagic.size()))) != 0)
-    return fail(LevelStatus::kNotALevel, name + "not a tetraprobe level (bad magic)");
-  if (size < kMagic.size() + 4)
-    return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) + " bytes");
-  Reader r(data + kMagic.size());
-  const uint32_t version = r.u32();
-  if (version != kVersion)
-    return fail(LevelStatus::kUnsupportedVersion, name + "format version " + std::to_string(version) +
-                                                      " (this reader understands version " +
-                                                      std::to_string(kVersion) + ")");
-  if (size < kHeaderBytes)
-    return fail(LevelStatus::kTruncated, name + "truncated header: " + std::to_string(size) + " bytes");
-  Reader crcField(data + kHeaderCrcOffset);
-  if (crc32(data, kHeaderCrcOffset) != crcField.u32())
-    return fail(LevelStatus::kCorrupt, name + "header checksum mismatch");
-
-  const uint32_t headerBytes = r.u32();
-  Level level;
-  level.content = r.u32();
-  level.shOrder = r.u32();
-  level.origin.x = r.f64();
-  level.origin.y = r.f64();
-  level.origin.z = r.f64();
-  const uint64_t probeCount = r.u64(), tetCount = r.u64(), generatorBytes = r.u64();
-  const uint32_t sectionCount = r.u32();
-  if (headerBytes != kHeaderBytes || sectionCount > kMaxSections)
-    return fail(LevelStatus::kCorrupt, name + "unexpected header size or " + std::to_string(sectionCount) +
-                                           " sections (at most " + std::to_string(kMaxSections) + ")");
-  // Counts are checked against the limits first, so the size arithmetic below cannot overflow (< 2^48).
-  if (probeCount > kMaxCount || tetCount > kMaxCount || generatorBytes > kMaxGeneratorBytes)
-    return fail(LevelStatus::kCorrupt, name + "implausible counts: " + std::to_string(probeCount) +
-                                           " probes, " + std::to_string(tetCount) + " tets, " +
-                                           std::to_string(generatorBytes) + " generator bytes");
-  const uint64_t tableEnd = kHeaderBytes + kSectionEntryBytes * sectionCount + 4;
-  const uint64_t minimum = tableEnd + probeCount * (kProbeBytes + kShHalfBytes) + tetCount * kMinTetBytes +
-                           generatorBytes + kTrailerBytes;
-  if (size < minimum)
-    return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
-                                             " bytes, the header needs at least " + std::to_string(minimum));
-  Reader tableCrc(data + tableEnd - 4);
-  if (crc32(data + kHeaderBytes, size_t(tableEnd - 4 - kHeaderBytes)) != tableCrc.u32())
-    return fail(LevelStatus::kCorrupt, name + "section table checksum mismatch");
-
-  // The section table: packed in table order after it, each size bounded so the sum cannot overflow.
-  struct Section {
-    uint64_t offset = 0, size = 0;
-    bool present = false;
-  };
-  Section probes, sh, shHalf, tets, tetsCompact, tetsPacked, generator, outer, cellGrid, cellGridPacked,
-      occlusionFixed, occlusionPacked, kinds, stream;
-  uint64_t expected = tableEnd;
-  Reader table(data + kHeaderBytes);
-  for (uint32_t i = 0; i < sectionCount; ++i) {
-    const uint32_t t = table.u32(), flags = table.u32();
-    const uint64_t offset = table.u64(), bytes = table.u64();
-    const std::string where = "section " + std::to_string(i) + ": ";
-    if ((flags & ~kSectionRequired) != 0 || offset != expected || bytes > kMaxSectionBytes)
-      return fail(LevelStatus::kCorrupt, name + where + "bad flags, offset or size");
-    expected += bytes;
-    Section* known = t == kTagProbes            ? &probes
-                     : t == kTagSh              ? &sh
-                     : t == kTagShHalf          ? &shHalf
-                     : t == kTagTets            ? &tets
-                     : t == kTagTetsCompact     ? &tetsCompact
-                     : t == kTagTetsPacked      ? &tetsPacked
-                     : t == kTagGenerator       ? &generator
-                     : t == kTagOuterCells      ? &outer
-                     : t == kTagCellGrid        ? &cellGrid
-                     : t == kTagCellGridPacked  ? &cellGridPacked
-                     : t == kTagOcclusion       ? &occlusionFixed
-                     : t == kTagOcclusionPacked ? &occlusionPacked
-                     : t == kTagProbeKinds      ? &kinds
-                     : t == kTagStream          ? &stream
-                                                : nullptr;
-    if (!known) {
-      if (flags & kSectionRequired)
-        return fail(LevelStatus::kUnsupportedVersion,
-                    name + where + "unknown required section tag " + std::to_string(t));
-      continue;  // optional data this reader does not know: skipped (still covered by the payload CRC)
-    }
-    if (known->present) return fail(LevelStatus::kCorrupt, name + where + "repeated section tag");
-    *known = {offset, bytes, true};
-  }
-  expected += kTrailerBytes;
-  if (size < expected)
-    return fail(LevelStatus::kTruncated, name + "truncated: " + std::to_string(size) +
-                                             " bytes, the section table needs " + std::to_string(expected));
-  if (size > expected)
-    return fail(LevelStatus::kCorrupt, name + std::to_string(size - expected) + " unexpected trailing bytes");
-  Reader trailer(data + expected - kTrailerBytes);
-  if (crc32(data + kHeaderBytes, size_t(expected - kHeaderBytes - kTrailerBytes)) != trailer.u32())
+  // The header and the section table (level_file.h: the checks every reader shares), the payload
+  // checksum, then each known section's size.
+  LevelFileLayout layout;
+  if (LevelResult e = parseLevelHeader(data, size, path, layout); !e) return e;
+  if (LevelResult e = parseLevelTable(data + kHeaderBytes, size, path, layout); !e) return e;
+  if (crc32(data + kHeaderBytes, size_t(size - kHeaderBytes - kTrailerBytes)) !=
+      Reader(data + size - kTrailerBytes).u32())
     return fail(LevelStatus::kCorrupt, name + "payload checksum mismatch");
-
-  // Each section's own validation: present, and sized as the header's counts say.
-  const auto sized = [&](const Section& sec, uint64_t want, const char* what) -> LevelResult {
-    if (!sec.present) return fail(LevelStatus::kCorrupt, name + "missing " + what + " section");
-    if (sec.size != want)
-      return fail(LevelStatus::kCorrupt, name + what + " section of " + std::to_string(sec.size) +
-                                             " bytes, the header's counts need " + std::to_string(want));
-    return {};
-  };
-  if (LevelResult e = sized(probes, probeCount * kProbeBytes, "probe"); !e) return e;
-  // SH: half precision (SHRH, what saveLevel writes) or float (SHRG, levels written before it), not both.
-  if (sh.present && shHalf.present)
-    return fail(LevelStatus::kCorrupt, name + "both SHRG and SHRH SH sections");
-  if (LevelResult e = shHalf.present ? sized(shHalf, probeCount * kShHalfBytes, "SH")
-                                     : sized(sh, probeCount * kShBytes, "SH");
-      !e)
-    return e;
-  // Tets: vertices only, packed (TETM, what saveLevel writes) or in fixed records (TETC, streamed levels), or
-  // with neighbours (TETS, levels written before them); one of the three.
-  if (int(tets.present) + int(tetsCompact.present) + int(tetsPacked.present) > 1)
-    return fail(LevelStatus::kCorrupt, name + "more than one of the TETS, TETC and TETM tet sections");
+  if (LevelResult e = checkLevelSections(layout, path); !e) return e;
+  Level level;
+  level.content = layout.content;
+  level.shOrder = layout.shOrder;
+  level.origin = layout.origin;
+  const uint64_t probeCount = layout.probeCount, tetCount = layout.tetCount,
+                 generatorBytes = layout.generatorBytes;
+  const LevelSectionRef &probes = layout.probes, &sh = layout.sh, &shHalf = layout.shHalf,
+                        &tets = layout.tets, &tetsCompact = layout.tetsCompact,
+                        &tetsPacked = layout.tetsPacked, &generator = layout.generator,
+                        &outer = layout.outerCells, &cellGrid = layout.cellGrid,
+                        &cellGridPacked = layout.cellGridPacked, &occlusionFixed = layout.occlusion,
+                        &occlusionPacked = layout.occlusionPacked, &kinds = layout.probeKinds,
+                        &stream = layout.stream;
   const bool tetsLinked = tetsCompact.present || tetsPacked.present;  // neighbours derived on load
   const uint32_t indexBytes = levelProbeIndexBytes(probeCount);
-  if (tetsPacked.present) {
-    if (tetsPacked.size < 2 * tetCount)  // two control bytes a tet at least; the decoder checks the rest
-      return fail(LevelStatus::kCorrupt, name + "tet section of " + std::to_string(tetsPacked.size) +
-                                             " bytes, the header's counts need at least " +
-                                             std::to_string(2 * tetCount));
-  } else if (LevelResult e = tetsCompact.present ? sized(tetsCompact, tetCount * 4 * indexBytes, "tet")
-                                                 : sized(tets, tetCount * kTetBytes, "tet");
-             !e) {
-    return e;
-  }
-  if (LevelResult e = sized(generator, generatorBytes, "generator"); !e) return e;
-  if (outer.present && (outer.size % kOuterCellBytes != 0 || outer.size / kOuterCellBytes > kMaxCount))
-    return fail(LevelStatus::kCorrupt,
-                name + "outer cell section of " + std::to_string(outer.size) + " bytes is not whole records");
-
-  if (kinds.present && kinds.size != probeCount)
-    return fail(LevelStatus::kCorrupt, name + "probe kind section of " + std::to_string(kinds.size) +
-                                           " bytes for " + std::to_string(probeCount) + " probes");
 
   // The cell grid: nodes with their planes (CGR2) or packed (CGR4: a varint stream, checked as it is decoded).
-  if (cellGrid.present && cellGridPacked.present)
-    return fail(LevelStatus::kCorrupt, name + "both CGR2 and CGR4 cell grid sections");
   const bool gridPacked = cellGridPacked.present;
-  if (gridPacked && !tetsLinked)  // CGR4 refers to the neighbours the loader derives
-    return fail(LevelStatus::kCorrupt, name + "a CGR4 cell grid with TETS tets");
-  const Section& grid = gridPacked ? cellGridPacked : cellGrid;
+  const LevelSectionRef& grid = gridPacked ? cellGridPacked : cellGrid;
   uint64_t gridSlots = 0, gridNodes = 0;
   if (grid.present) {
     if (grid.size < kCellGridHeaderBytes)
@@ -766,10 +662,8 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
   }
 
   // Occlusion: fixed 8-byte records with their offsets (OCCL) or packed (OCC2, what saveLevel writes).
-  if (occlusionFixed.present && occlusionPacked.present)
-    return fail(LevelStatus::kCorrupt, name + "both OCCL and OCC2 occlusion sections");
   const bool occPacked = occlusionPacked.present;
-  const Section& occlusion = occPacked ? occlusionPacked : occlusionFixed;
+  const LevelSectionRef& occlusion = occPacked ? occlusionPacked : occlusionFixed;
   uint64_t occTets = 0, occPlanes = 0, occBlocks = 0, occCellBytes = 0;
   if (occlusion.present) {
     const uint64_t headerBytes = occPacked ? kOcclusionPackedHeaderBytes : kOcclusionHeaderBytes;
@@ -787,6 +681,12 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
             headerBytes + recordBytes + occPlanes * kOcclusionPlaneBytes + occBlocks * kShadowMapBlockBytes)
       return fail(LevelStatus::kCorrupt, name + "occlusion section size does not match its counts");
   }
+
+  // The streaming index (kept as bytes): its structure, its CRC and each sector's, as StreamingLevel reads
+  // them (stream_format.h), so a file one loader accepts the other does too.
+  if (stream.present)
+    if (std::string e = runtime_detail::checkStreamIndex(data, size_t(size), layout); !e.empty())
+      return fail(LevelStatus::kCorrupt, name + e);
 
   // Sizes are now known to be backed by the file: allocate and parse.
   Reader body(data + probes.offset);

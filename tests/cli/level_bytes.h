@@ -9,18 +9,14 @@
 #include <cstring>
 #include <vector>
 
+#include "tetraprobe/runtime/crc32.h"
+#include "tetraprobe/runtime/level_file.h"
+
 namespace tetraprobe::test {
 
 using Bytes = std::vector<uint8_t>;
 
-inline uint32_t crc32(const uint8_t* p, size_t n) {  // IEEE 802.3, as the format
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) {
-    c ^= p[i];
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-  }
-  return c ^ 0xFFFFFFFFu;
-}
+using tetraprobe::crc32;  // the format's one CRC-32 (tetraprobe/runtime/crc32.h)
 inline uint32_t getU32(const Bytes& b, size_t at) {
   uint32_t v = 0;
   for (int i = 0; i < 4; ++i) v |= uint32_t(b[at + size_t(i)]) << (8 * i);
@@ -45,13 +41,10 @@ inline int32_t getI32(const Bytes& b, size_t at) {
   return int32_t(getU32(b, at));
 }
 
-// Header, table and payload CRCs recomputed, so a change past them reaches the later checks.
+// Every checksum recomputed (header, table, payload, and a streaming index's own and its sectors'), so a
+// change past them reaches the later checks: the runtime's recomputeLevelChecksums (level_file.h).
 inline void fixChecksums(Bytes& b) {
-  putU32(b, 76, crc32(b.data(), 76));
-  const size_t tableEnd = 80 + 24 * size_t(getU32(b, 72)) + 4;
-  if (tableEnd + 4 > b.size()) return;  // a table larger than the file (the loader's own case)
-  putU32(b, tableEnd - 4, crc32(b.data() + 80, tableEnd - 4 - 80));
-  putU32(b, b.size() - 4, crc32(b.data() + 80, b.size() - 4 - 80));
+  tetraprobe::recomputeLevelChecksums(b.data(), b.size());
 }
 
 // Offset of the section with this tag (four ASCII characters), from the table.

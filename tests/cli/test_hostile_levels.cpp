@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "level_bytes.h"
+#include "tetraprobe/runtime/streaming.h"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -74,10 +75,28 @@ const char* kBoxObj =
     "f 3 2 1\nf 4 3 1\nf 7 8 5\nf 6 7 5\nf 6 5 1\nf 2 6 1\nf 7 6 2\nf 3 7 2\nf 8 7 3\nf 4 8 3\nf 5 8 4\nf 1 "
     "5 4\n"
     "usemtl light\nf 11 12 9\nf 10 11 9\n";
+// StreamingLevel on `path` refuses it: at open, or at the load of some sector (each is tried); `why` is the
+// message.
+bool streamingRefuses(const std::string& path, std::string* why) {
+  tetraprobe::StreamingLevel st;
+  if (const tetraprobe::LevelResult r = st.open(path); !r) {
+    *why = r.message;
+    return true;
+  }
+  for (const tetraprobe::SectorKey& key : st.sectors())
+    if (const tetraprobe::LevelResult r = st.load(key); !r) {
+      *why = r.message;
+      return true;
+    }
+  return false;
+}
+
 const char* kBoxMtl = "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
 
 // Every hostile level: exit 2, one line naming the file, no signal. The good level itself loads (exit 0), so
-// each case's failure is its own change.
+// each case's failure is its own change. Each case is made from the plain level and from the same level
+// with a streaming index (where it applies), and each file also goes through StreamingLevel, which must
+// refuse it too, at open or when the sector that reads the damage is loaded.
 TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
   std::ofstream(dir_ / "box.obj") << kBoxObj;
   std::ofstream(dir_ / "box.mtl") << kBoxMtl;
@@ -103,8 +122,9 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
     streamed.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
 
-  const size_t prbs = section(level, "PRBS"), shrh = section(level, "SHRH"), tetm = section(level, "TETM"),
-               cgr4 = section(level, "CGR4"), kind = section(level, "KIND");
+  // Offsets are taken from the copy a case edits (the plain level or the streamed one).
+  const auto at = [](const Bytes& b, const char* tag) { return section(b, tag); };
+  const size_t tetm = section(level, "TETM");
   const size_t tets = section(streamed, "TETC"), streamedPrbs = section(streamed, "PRBS");
   const uint64_t probeCount = getU64(level, 48), tetCount = getU64(level, 56);
   ASSERT_GE(tetCount, 4u);
@@ -123,7 +143,9 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
     std::string name;
     std::function<void(Bytes&)> edit;  // applied to a copy of the good level
     bool fixCrc;                       // recompute the checksums after the edit
-    bool onStreamed = false;           // edit the streamed copy (fixed tet records) instead
+    bool onStreamed = false;           // edit the streamed copy (fixed tet records) only
+    bool plainOnly = false;            // edit the plain copy only (set below)
+    bool streamingReads = true;        // StreamingLevel reads the damaged bytes (set below)
   };
   const auto truncateTo = [](size_t n) { return [n](Bytes& b) { b.resize(std::min(n, b.size())); }; };
   std::vector<Case> cases = {
@@ -141,10 +163,11 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
        },
        false},
       {"version_2", [](Bytes& b) { putU32(b, 8, 2); }, false},
+      {"version_4", [](Bytes& b) { putU32(b, 8, 4); }, true},  // the format before checksummed sectors
       {"version_99", [](Bytes& b) { putU32(b, 8, 99); }, false},
       {"bad_header_crc", [](Bytes& b) { b[40] ^= 1; }, false},
       {"bad_table_crc", [](Bytes& b) { b[90] ^= 1; }, false},
-      {"bad_payload_crc", [&](Bytes& b) { b[shrh + 5] ^= 1; }, false},
+      {"bad_payload_crc", [&](Bytes& b) { b[at(b, "SHRH") + 5] ^= 1; }, false},
       {"header_size", [](Bytes& b) { putU32(b, 12, 96); }, true},
       {"content_flags", [](Bytes& b) { putU32(b, 16, 0xFF); }, true},
       {"sh_order_3", [](Bytes& b) { putU32(b, 20, 3); }, true},
@@ -158,17 +181,25 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
       {"section_offset_gap", [](Bytes& b) { putU64(b, 80 + 24 + 8, getU64(b, 80 + 24 + 8) + 4); }, true},
       {"unknown_required_section", [](Bytes& b) { putU32(b, 80 + 24 * 3, 0x5A5A5A5A); }, true},
       {"repeated_section", [](Bytes& b) { putU32(b, 80 + 24 * 3, getU32(b, 80 + 24 * 2)); }, true},
-      {"nan_position", [&](Bytes& b) { putU32(b, prbs + 4, 0x7FC00000u); }, true},
-      {"inf_position", [&](Bytes& b) { putF32(b, prbs + 8, std::numeric_limits<float>::infinity()); }, true},
-      {"huge_position", [&](Bytes& b) { putF32(b, prbs, 1e30f); }, true},
-      {"nan_sh", [&](Bytes& b) { putU32(b, shrh + 12, 0x7E007E00u); }, true},  // two binary16 NaNs
-      {"inf_sh", [&](Bytes& b) { putU32(b, shrh + 8, 0x00007C00u); }, true},   // +inf, then 0
+      {"nan_position", [&](Bytes& b) { putU32(b, at(b, "PRBS") + 4, 0x7FC00000u); }, true},
+      {"inf_position",
+       [&](Bytes& b) { putF32(b, at(b, "PRBS") + 8, std::numeric_limits<float>::infinity()); }, true},
+      {"huge_position", [&](Bytes& b) { putF32(b, at(b, "PRBS"), 1e30f); }, true},
+      {"nan_sh", [&](Bytes& b) { putU32(b, at(b, "SHRH") + 12, 0x7E007E00u); }, true},  // two binary16 NaNs
+      {"inf_sh", [&](Bytes& b) { putU32(b, at(b, "SHRH") + 8, 0x00007C00u); }, true},   // +inf, then 0
       // The probe's scale (binary16 27, high half of the record's last uint) must be a power of two.
       {"sh_scale_not_power_of_two",
-       [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0x3C010000u); }, true},
-      {"sh_scale_zero", [&](Bytes& b) { putU32(b, shrh + 52, getU32(b, shrh + 52) & 0xFFFFu); }, true},
+       [&](Bytes& b) {
+         putU32(b, at(b, "SHRH") + 52, (getU32(b, at(b, "SHRH") + 52) & 0xFFFFu) | 0x3C010000u);
+       },
+       true},
+      {"sh_scale_zero",
+       [&](Bytes& b) { putU32(b, at(b, "SHRH") + 52, getU32(b, at(b, "SHRH") + 52) & 0xFFFFu); }, true},
       {"sh_scale_negative",
-       [&](Bytes& b) { putU32(b, shrh + 52, (getU32(b, shrh + 52) & 0xFFFFu) | 0xBC000000u); }, true},
+       [&](Bytes& b) {
+         putU32(b, at(b, "SHRH") + 52, (getU32(b, at(b, "SHRH") + 52) & 0xFFFFu) | 0xBC000000u);
+       },
+       true},
       {"vertex_out_of_range", [&](Bytes& b) { putIndex(b, 0, 1, 1u << 15); }, true, true},
       {"vertex_at_probe_count", [&](Bytes& b) { putIndex(b, 1, 2, uint32_t(probeCount)); }, true, true},
       {"vertex_repeated", [&](Bytes& b) { putIndex(b, 0, 1, getIndex(b, 0, 0)); }, true, true},
@@ -195,39 +226,61 @@ TEST_F(HostileLevels, InspectExitsTwoWithOneLineForEveryBadFile) {
          std::memmove(b.data() + to, b.data() + from, 12);
        },
        true, true},
-      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, cgr4 + 12, 0.0f); }, true},
-      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, cgr4 + 48, 1ull << 33); }, true},
+      {"grid_cell_size_zero", [&](Bytes& b) { putF32(b, at(b, "CGR4") + 12, 0.0f); }, true},
+      {"grid_slot_count_huge", [&](Bytes& b) { putU64(b, at(b, "CGR4") + 48, 1ull << 33); }, true},
       // CGR4's node stream starts with node 0's varint, zigzag(tet) << 6 | face and child codes: five bytes
       // over it make 2^36 - 1, a tet 2^29 before the first.
       {"grid_node_face_of_missing_tet",
        [&](Bytes& b) {
-         const size_t stream = size_t(cgr4 + 64 + 16 * getU64(b, cgr4 + 48));
+         const size_t stream = size_t(at(b, "CGR4") + 64 + 16 * getU64(b, at(b, "CGR4") + 48));
          for (int i = 0; i < 5; ++i) b[stream + size_t(i)] = char(i < 4 ? 0xFF : 0x0F);
        },
        true},
       // The same stream opened with a varint that never ends within 64 bits.
       {"grid_node_varint_overlong",
        [&](Bytes& b) {
-         const size_t stream = size_t(cgr4 + 64 + 16 * getU64(b, cgr4 + 48));
+         const size_t stream = size_t(at(b, "CGR4") + 64 + 16 * getU64(b, at(b, "CGR4") + 48));
          for (int i = 0; i < 11; ++i) b[stream + size_t(i)] = char(0xFF);
        },
        true},
-      {"probe_kind_unknown", [&](Bytes& b) { b[kind] = 200; }, true},
+      {"probe_kind_unknown", [&](Bytes& b) { b[at(b, "KIND")] = 200; }, true},
   };
 
-  for (const Case& c : cases) {
-    Bytes b = c.onStreamed ? streamed : level;
-    c.edit(b);
-    if (c.fixCrc) fixChecksums(b);
-    const fs::path p = file(c.name + ".tpb", b);
-    const Run r = run("inspect " + p.string());
-    if (std::getenv("TETRAPROBE_TEST_VERBOSE"))
-      std::fprintf(stderr, "%-26s %d %s", c.name.c_str(), r.code, r.err.c_str());
-    EXPECT_FALSE(r.signalled) << c.name << ": killed by a signal: " << r.err;
-    EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
-    EXPECT_NE(r.err.find(p.filename().string()), std::string::npos) << c.name << ": " << r.err;
+  for (Case& c : cases) {
+    c.plainOnly = c.name.rfind("tetm_", 0) == 0;  // a streamed level stores TETC, not TETM
+    // The cell grid (CGR4) and the probe kinds (KIND) are never read by StreamingLevel (a sector carries
+    // its own BSP nodes in the index): damage there is loadLevel's alone to refuse.
+    c.streamingReads = c.name.rfind("grid_", 0) != 0 && c.name != "probe_kind_unknown";
   }
+
+  for (const Case& c : cases)
+    for (const bool onStreamedCopy : {false, true}) {
+      if ((c.onStreamed && !onStreamedCopy) || (c.plainOnly && onStreamedCopy)) continue;
+      const std::string name = c.name + (onStreamedCopy && !c.onStreamed ? "_streamed" : "");
+      Bytes b = onStreamedCopy ? streamed : level;
+      c.edit(b);
+      if (c.fixCrc) fixChecksums(b);
+      const fs::path p = file(name + ".tpb", b);
+      const Run r = run("inspect " + p.string());
+      std::string why;
+      const bool refused = streamingRefuses(p.string(), &why);
+      if (std::getenv("TETRAPROBE_TEST_VERBOSE"))
+        std::fprintf(stderr, "%-36s %d %s  streaming: %s\n", name.c_str(), r.code, r.err.c_str(),
+                     why.c_str());
+      EXPECT_FALSE(r.signalled) << name << ": killed by a signal: " << r.err;
+      EXPECT_EQ(r.code, 2) << name << ": " << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << name << ": " << r.err;
+      EXPECT_NE(r.err.find(p.filename().string()), std::string::npos) << name << ": " << r.err;
+      if (!onStreamedCopy || c.streamingReads)
+        EXPECT_TRUE(refused) << name << ": StreamingLevel accepts what loadLevel refuses: " << r.err;
+      else
+        EXPECT_FALSE(refused) << name << ": " << why;  // damage in a section it never reads
+    }
+
+  // The level of the previous format version (case version_4): refused naming both versions, on inspect's
+  // stderr.
+  const Run v4 = run("inspect " + (dir_ / "version_4.tpb").string());
+  EXPECT_NE(v4.err.find("format version 4 (this reader understands version 5"), std::string::npos) << v4.err;
 
   // Paths that are not level files at all: missing, a directory, a device, a file over the size limit
   // (sparse: 5 GiB declared, nothing written).

@@ -178,8 +178,10 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
     maxSector = std::max(maxSector, (d.tets.size() + d.probes.size()) * 4 + d.tets.size() * (32 + 8) +
                                         d.probes.size() * 120 + d.nodes.size() * 24);
   }
+  // The checksums (the index's, at byte 56, and each sector's, at byte 40 of its record) are left zero:
+  // saveLevel computes them over the bytes it writes (runtime/src/stream_format.h).
   Bytes w;
-  w.u32(1);  // version
+  w.u32(2);  // version
   w.u32(uint32_t(sectors.size()));
   for (int a = 0; a < 3; ++a) w.f32(g.min[a]);
   w.f32(g.cellSize);
@@ -188,7 +190,7 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
   w.u64(nodes);
   w.u32(uint32_t(kept.size()));
   w.u32(uint32_t(coarseTets.size()));
-  w.u32(0);
+  w.u32(0);  // the index's CRC
   w.u32(0);
   uint32_t tetAt = 0, probeAt = 0, nodeAt = 0;
   for (const auto& [key, d] : sectors) {
@@ -200,6 +202,7 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
     w.u32(uint32_t(d.probes.size()));
     w.u32(nodeAt);
     w.u32(uint32_t(d.nodes.size()));
+    w.u32(0);  // the sector's CRC
     tetAt += uint32_t(d.tets.size());
     probeAt += uint32_t(d.probes.size());
     nodeAt += uint32_t(d.nodes.size());

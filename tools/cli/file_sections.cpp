@@ -2,28 +2,18 @@
 #include "file_sections.h"
 
 #include <algorithm>
-#include <fstream>
 
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/level_file.h"
 
 namespace tetraprobe::cli {
 
 std::vector<FileSection> fileSections(const std::string& path) {
-  // Only the header and the table are read (80 + 24 bytes a section), not the level.
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open");
-  const auto u = [](const char* b, int n) {
-    uint64_t v = 0;
-    for (int i = 0; i < n; ++i) v |= uint64_t(uint8_t(b[i])) << (8 * i);
-    return v;
-  };
-  char header[80];
+  // Only the header and the table are read (80 + 24 bytes a section), by the runtime's one parser.
+  LevelFileLayout layout;
+  if (const LevelResult r = readLevelLayout(path, layout); !r) throw InputError(r.message);
   std::vector<FileSection> out;
-  if (!in.read(header, sizeof header)) return out;
-  const uint64_t count = u(header + 72, 4);
-  char entry[24];
-  for (uint64_t i = 0; i < count && in.read(entry, sizeof entry); ++i)
-    out.push_back({std::string(entry, 4), u(entry + 16, 8)});
+  for (const LevelSectionEntry& s : layout.sections) out.push_back({levelTagName(s.tag), s.size});
   return out;
 }
 

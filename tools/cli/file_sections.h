@@ -12,10 +12,9 @@ struct FileSection {
   uint64_t bytes;
 };
 
-// The sections of the level file at `path`, in file order (docs/level_format.md: a u32 count at byte 72,
-// 24-byte entries from byte 80: tag, flags, offset, size, little-endian). Call only on a file loadLevel
-// accepted or saveLevel wrote, so the table is whole and its checksum holds. Throws InputError when the
-// file cannot be read.
+// The sections of the level file at `path`, in file order, read by the runtime's header and table parser
+// (readLevelLayout, level_file.h: only those bytes are read). Throws InputError with its one-line message
+// when the file cannot be read or its header or table is refused.
 std::vector<FileSection> fileSections(const std::string& path);
 
 // The bytes of the first section whose tag is one of `tags`, or 0.

@@ -1,51 +1,23 @@
 // libFuzzer harness over the level loader (loadLevelFromMemory, runtime/src/level_io.cpp) and the CPU queries
 // on whatever it accepts: a level file is untrusted input an engine ships (docs/level_format.md, "Loading
 // untrusted files"). Each input is loaded twice: as it is (the checksums reject nearly every mutation), then
-// with its header, table and payload CRCs recomputed, so the mutations reach the counts, the section table,
-// the parse and validateLevel. A level that loads is queried inside and outside its hull, one at a time,
+// with every checksum recomputed (recomputeLevelChecksums, level_file.h: header, table, payload and a
+// streaming index's), so the mutations reach the counts, the section table, the parse and validateLevel. A level that loads is queried inside and outside its hull, one at a time,
 // as a batch and as a cached walk (ProbeQuery, which builds the start grid, outer cells and cell grid the file
 // may lack). Any crash, sanitizer report, leak or hang is a bug; an error result is the expected outcome.
 // Built by `make fuzz` with clang (-fsanitize=fuzzer,address,undefined); seeds: tools/fuzz/make_seeds.sh.
-#include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <vector>
 
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/level_file.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace {
-
-uint32_t crc32(const uint8_t* p, size_t n) {  // IEEE 802.3, as level_io.cpp
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) {
-    c ^= p[i];
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-  }
-  return c ^ 0xFFFFFFFFu;
-}
-
-void putU32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
-}
-
-// Recomputes the three CRCs where the file is long enough to hold them (layout: docs/level_format.md).
-void fixChecksums(std::vector<uint8_t>& f) {
-  constexpr size_t kHeader = 80;
-  if (f.size() < kHeader) return;
-  putU32(f.data() + 76, crc32(f.data(), 76));
-  uint32_t sections = 0;
-  std::memcpy(&sections, f.data() + 72, 4);  // little-endian hosts only (x86-64, aarch64)
-  const uint64_t tableEnd = kHeader + 24ull * std::min<uint32_t>(sections, 64) + 4;
-  if (f.size() >= tableEnd)
-    putU32(f.data() + tableEnd - 4, crc32(f.data() + kHeader, tableEnd - 4 - kHeader));
-  if (f.size() >= kHeader + 4)
-    putU32(f.data() + f.size() - 4, crc32(f.data() + kHeader, f.size() - 4 - kHeader));
-}
 
 void query(const tetraprobe::Level& level) {
   tetraprobe::ProbeQuery q(level, 16.0f, 1);
@@ -89,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   tetraprobe::Level level;
   if (loadLevelFromMemory(data, size, "fuzz", level)) query(level);
   std::vector<uint8_t> fixed(data, data + size);
-  fixChecksums(fixed);
+  tetraprobe::recomputeLevelChecksums(fixed.data(), fixed.size());
   if (loadLevelFromMemory(fixed.data(), fixed.size(), "fuzz", level)) query(level);
   return 0;
 }

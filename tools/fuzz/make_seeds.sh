@@ -3,6 +3,8 @@
 # Usage: tools/fuzz/make_seeds.sh TETRAPROBE_BINARY OUT_DIR
 #   OUT_DIR/level/  real levels baked from samples/two_rooms with 14 user probes (a few seconds each): one with
 #                   occlusion planes, one with shadow maps, one L1; each with outer cells, cell grid, kinds
+#   OUT_DIR/streaming/  the same levels with a streaming index (`tetraprobe stream`, 2 m coarse spacing), for
+#                   fuzz_streaming.cpp
 #   OUT_DIR/scene/  inputs of fuzz_scene.cpp (byte 0 = format, then the file, "#--", its companion):
 #                   the sample's OBJ + MTL, its scene JSON + a small OBJ, a glTF with a data URI and with b.bin,
 #                   a glb
@@ -11,7 +13,7 @@ TP=$1
 OUT=$2
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 SAMPLE=$ROOT/samples/two_rooms
-mkdir -p "$OUT/level" "$OUT/scene"
+mkdir -p "$OUT/level" "$OUT/streaming" "$OUT/scene"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
@@ -39,6 +41,9 @@ fast=(--probes "$TMP/probes.csv" --placement none --samples 16 --noise 0 --fill-
   >/dev/null
 "$TP" bake "$SAMPLE/two_rooms.scene.json" -o "$OUT/level/l1.tpb" "${fast[@]}" --occlusion none --sh-order 1 \
   >/dev/null
+for level in planes shadow_maps l1; do
+  "$TP" stream "$OUT/level/$level.tpb" -o "$OUT/streaming/$level.tpb" --coarse-spacing 2 >/dev/null
+done
 
 # --- scenes
 sep=$'\n#--\n'
@@ -110,4 +115,4 @@ le32() { printf "\\x$(printf %02x $(($1 & 255)))\\x$(printf %02x $((($1 >> 8) & 
 jl=$(stat -c %s "$TMP/j.json")
 { printf '\x02glTF'; le32 2; le32 $((12 + 8 + jl + 8 + 44)); le32 "$jl"; printf 'JSON'; cat "$TMP/j.json"
   le32 44; printf 'BIN\x00'; cat "$TMP/b.bin"; } > "$OUT/scene/glb_triangle"
-echo "seeds: $(ls "$OUT/level" | wc -l) levels, $(ls "$OUT/scene" | wc -l) scenes in $OUT"
+echo "seeds: $(ls "$OUT/level" | wc -l) levels, $(ls "$OUT/streaming" | wc -l) streamed levels, $(ls "$OUT/scene" | wc -l) scenes in $OUT"

@@ -29,16 +29,17 @@ fi
 cmake -S "$ROOT" -B "$DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER="$CC" \
   -DCMAKE_CXX_COMPILER="$CXX" -DTETRAPROBE_FUZZ=ON -DTETRAPROBE_BUILD_TESTS=OFF -DTETRAPROBE_BUILD_BENCH=OFF \
   ${CMAKE_CXX_COMPILER_LAUNCHER:+-DCMAKE_CXX_COMPILER_LAUNCHER=$CMAKE_CXX_COMPILER_LAUNCHER} >/dev/null
-cmake --build "$DIR" --target tetraprobe_fuzz_level tetraprobe_fuzz_scene -j "${JOBS:-2}"
+cmake --build "$DIR" --target tetraprobe_fuzz_level tetraprobe_fuzz_scene tetraprobe_fuzz_streaming -j "${JOBS:-2}"
 
-if [ ! -d "$DIR/seeds/level" ]; then
+if [ ! -d "$DIR/seeds/streaming" ]; then
   rm -rf "$DIR/seeds.tmp"
   "$ROOT/tools/fuzz/make_seeds.sh" "$TP" "$DIR/seeds.tmp"
+  rm -rf "$DIR/seeds"
   mv "$DIR/seeds.tmp" "$DIR/seeds"
 fi
 mkdir -p "$DIR/artifacts"
 status=0
-for kind in level scene; do
+for kind in level streaming scene; do
   corpus=$DIR/corpus/$kind
   mkdir -p "$corpus"
   log=$DIR/fuzz_$kind.log

@@ -132,7 +132,7 @@ struct LevelResult {
 };
 
 // The level file format version this reader and writer implement (docs/level_format.md, version policy).
-inline constexpr uint32_t kLevelFormatVersion = 4;
+inline constexpr uint32_t kLevelFormatVersion = 5;
 
 // Bytes one probe index takes in the level file's tet records (`TETC`, docs/level_format.md): the fewest
 // that hold every index of a level of `probeCount` probes (2 up to 65,536 probes, 3 up to 2^24, else 4).

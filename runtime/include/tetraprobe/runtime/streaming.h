@@ -39,12 +39,17 @@ class StreamingLevel {
   StreamingLevel(const StreamingLevel&) = delete;
   StreamingLevel& operator=(const StreamingLevel&) = delete;
 
-  // Opens a level file with a STRM section: checks the header, the section table and the payload checksum
-  // (one sequential pass over the file, in 64 KiB pieces), reads the index's header and sector records (40
-  // bytes a sector) and the coarse set, and builds the coarse set's query. Holds the file open. Nothing of
-  // the fine level is loaded yet: a sector's references and BSP nodes are read by load(). Never throws; on failure the
-  // object is closed and the message names the file and the problem (kCorrupt for a bad or missing index).
+  // Opens a level file with a STRM section. Reads and checks only the framing and the index: the header
+  // and the section table with the checks loadLevel makes (level_file.h: version, CRCs, flags, repeated or
+  // unknown required sections, sizes), the occlusion section's 24-byte header, and the index's header,
+  // sector records (44 bytes a sector) and coarse set, against the index's own CRC; then builds the coarse
+  // set's query. Holds the file open. Nothing of the fine level is read yet: a sector's bytes are read, and
+  // checked against the sector's CRC, by load(). Never throws; on failure the object is closed and the
+  // message names the file and the problem (kUnsupportedVersion naming both versions for a file of another
+  // format version; kCorrupt for a bad or missing index).
   LevelResult open(const std::string& path);
+  // Bytes the last successful open() read from the file (the framing and the index; not the sectors).
+  uint64_t bytesReadAtOpen() const { return openBytesRead_; }
 
   // The sectors the file holds, in increasing key order.
   const std::vector<SectorKey>& sectors() const { return keys_; }
@@ -54,10 +59,11 @@ class StreamingLevel {
   bool isLoaded(const SectorKey& key) const { return loaded_.count(key) > 0; }
 
   // Reads a sector's references and BSP from the index and its tets, probes, SH and occlusion from the
-  // level's sections (seeks), and rebuilds the loaded level
+  // level's sections (seeks), checks them against the sector's CRC, and rebuilds the loaded level
   // (the union of the loaded sectors; cost proportional to it). Loading a loaded sector does nothing.
-  // kCorrupt when the sector's records fail validation; kCannotOpen when the file cannot be read; the key
-  // not being a sector of the file is kCorrupt too. Not to be called while other threads query.
+  // kCorrupt when the sector's bytes fail their CRC or its records fail validation (validateLevel on the
+  // loaded level, and a face shared by three loaded tets), leaving the other sectors loaded as they were;
+  // the key not being a sector of the file is kCorrupt too. Not to be called while other threads query.
   LevelResult load(const SectorKey& key);
   // Drops a sector and rebuilds the loaded level from the others. Unloading an absent sector does nothing.
   void unload(const SectorKey& key);
@@ -80,13 +86,17 @@ class StreamingLevel {
  private:
   struct Sector;
   struct File;
-  void rebuild();
+  LevelResult openChecked(const std::string& path);
+  // Joins the loaded sectors into fine_ and builds its query: "" or why the joined level is invalid (a face
+  // of three tets, or what validateLevel refuses), leaving fine_ empty.
+  std::string rebuild();
   void close();
 
   std::string path_;
   std::unique_ptr<File> file_;
+  uint64_t openBytesRead_ = 0;
   std::vector<SectorKey> keys_;
-  std::vector<uint8_t> index_;  // the STRM section's header and sector records
+  std::vector<uint8_t> index_;  // the STRM section's sector records
   Level coarse_;
   std::unique_ptr<ProbeQuery> coarseQuery_;
   std::map<SectorKey, std::unique_ptr<Sector>> loaded_;
