@@ -297,13 +297,14 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
 
   const VkMemoryPropertyFlags hostMem =
       VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  // Level buffers, exactly as an engine would upload them; or the grid's one buffer.
+  // Level buffers, exactly as an engine would upload them (device-local, staged); or the grid's one buffer.
   VulkanLevelBuffers levelBuffers;
   GpuBuffer gridBuffer;
   if (level) {
     std::string uploadError;
-    if (uploadLevelBuffers(ctx.physicalDevice(), device, *level, query->startGrid(), query->outerCells(),
-                           query->cellGrid(), levelBuffers, &uploadError) != VK_SUCCESS)
+    if (uploadLevelBuffers(ctx.physicalDevice(), device, ctx.queue(), ctx.commandPool(), *level,
+                           query->startGrid(), query->outerCells(), query->cellGrid(), levelBuffers,
+                           &uploadError) != VK_SUCCESS)
       throw std::runtime_error("render: level upload failed: " + uploadError);
     cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
   } else {

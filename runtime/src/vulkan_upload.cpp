@@ -1,8 +1,11 @@
-// Vulkan upload of a level's tets, SH and start grid into the storage buffers shaders/tetraprobe_layout.glsl
-// declares (host-visible coherent memory, one allocation per buffer).
+// Vulkan upload of a level's tets, SH, start grid, outer cells, cell grid and occlusion into the storage
+// buffers shaders/tetraprobe_layout.glsl declares: packed on the host (gpu_layout.h), written into one
+// host-visible staging buffer and copied by vkCmdCopyBuffer into buffers in device-local memory (one
+// allocation per buffer), so the per-pixel reads stay on the GPU's own memory on a discrete GPU.
 #include "tetraprobe/runtime/vulkan_upload.h"
 
 #include "tetraprobe/runtime/sh_half.h"
+#include "vulkan_staging.h"
 
 #include <algorithm>
 #include <climits>
@@ -18,47 +21,60 @@ const char* bindingName(int i) {
   return kNames[i];
 }
 
-bool findHostMemoryType(VkPhysicalDevice physicalDevice, uint32_t typeBits, uint32_t* index) {
+// The memory types allowed by `typeBits` in the order they are tried: those with every flag of `prefer` in
+// the device's order (the specification orders types so that the first match has the fewest extra
+// properties), then those with every flag of `fallback`.
+std::vector<uint32_t> memoryTypeCandidates(VkPhysicalDevice physicalDevice, uint32_t typeBits,
+                                           VkMemoryPropertyFlags prefer, VkMemoryPropertyFlags fallback) {
   VkPhysicalDeviceMemoryProperties props;
   vkGetPhysicalDeviceMemoryProperties(physicalDevice, &props);
-  const VkMemoryPropertyFlags want =
-      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  for (uint32_t i = 0; i < props.memoryTypeCount; ++i) {
-    if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) {
-      *index = i;
-      return true;
-    }
-  }
-  return false;
+  std::vector<uint32_t> out;
+  for (VkMemoryPropertyFlags want : {prefer, fallback})
+    for (uint32_t i = 0; i < props.memoryTypeCount; ++i)
+      if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want &&
+          std::find(out.begin(), out.end(), i) == out.end())
+        out.push_back(i);
+  return out;
 }
 
-// Creates one buffer holding `bytes` (zero-padded to `size`).
-VkResult createFilledBuffer(VkPhysicalDevice physicalDevice, VkDevice device, const std::vector<char>& bytes,
-                            VkDeviceSize size, VkBuffer* buffer, VkDeviceMemory* memory, std::string* what) {
+// Allocates and binds memory for `buffer` from the first candidate type that has room: a full heap
+// (VK_ERROR_OUT_OF_DEVICE_MEMORY) moves on to the next type. `flags` gets the chosen type's properties.
+VkResult allocateAndBind(VkPhysicalDevice physicalDevice, VkDevice device, VkBuffer buffer,
+                         VkMemoryPropertyFlags prefer, VkMemoryPropertyFlags fallback, VkDeviceMemory* memory,
+                         VkMemoryPropertyFlags* flags, std::string* what) {
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device, buffer, &req);
+  const std::vector<uint32_t> types =
+      memoryTypeCandidates(physicalDevice, req.memoryTypeBits, prefer, fallback);
+  if (types.empty()) return *what = "no memory type fits", VK_ERROR_FEATURE_NOT_PRESENT;
+  VkPhysicalDeviceMemoryProperties props;
+  vkGetPhysicalDeviceMemoryProperties(physicalDevice, &props);
+  VkResult r = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+  for (uint32_t type : types) {
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = type;
+    r = vkAllocateMemory(device, &alloc, nullptr, memory);
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY) continue;
+    if (r != VK_SUCCESS) break;
+    *flags = props.memoryTypes[type].propertyFlags;
+    r = vkBindBufferMemory(device, buffer, *memory, 0);
+    if (r != VK_SUCCESS) return *what = "vkBindBufferMemory failed", r;
+    return VK_SUCCESS;
+  }
+  *memory = VK_NULL_HANDLE;
+  return *what = "vkAllocateMemory failed", r;
+}
+
+VkResult createBuffer(VkDevice device, VkDeviceSize size, VkBufferUsageFlags usage, VkBuffer* buffer,
+                      std::string* what) {
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = size;
-  // TRANSFER_DST: cmdUpdateLevelSh (vulkan_sh_update.cpp) writes the SH with vkCmdUpdateBuffer.
-  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  VkResult r = vkCreateBuffer(device, &info, nullptr, buffer);
-  if (r != VK_SUCCESS) return *what = "vkCreateBuffer failed", r;
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(device, *buffer, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  if (!findHostMemoryType(physicalDevice, req.memoryTypeBits, &alloc.memoryTypeIndex))
-    return *what = "no host-visible coherent memory type", VK_ERROR_FEATURE_NOT_PRESENT;
-  r = vkAllocateMemory(device, &alloc, nullptr, memory);
-  if (r != VK_SUCCESS) return *what = "vkAllocateMemory failed", r;
-  r = vkBindBufferMemory(device, *buffer, *memory, 0);
-  if (r != VK_SUCCESS) return *what = "vkBindBufferMemory failed", r;
-  void* mapped = nullptr;
-  r = vkMapMemory(device, *memory, 0, VK_WHOLE_SIZE, 0, &mapped);
-  if (r != VK_SUCCESS) return *what = "vkMapMemory failed", r;
-  std::memset(mapped, 0, size_t(size));
-  if (!bytes.empty()) std::memcpy(mapped, bytes.data(), bytes.size());
-  vkUnmapMemory(device, *memory);
-  return VK_SUCCESS;
+  const VkResult r = vkCreateBuffer(device, &info, nullptr, buffer);
+  if (r != VK_SUCCESS) *what = "vkCreateBuffer failed";
+  return r;
 }
 
 template <typename T>
@@ -69,16 +85,104 @@ void appendBytes(std::vector<char>& out, const T* data, size_t count) {
 
 }  // namespace
 
-VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, const Level& level,
-                            const StartGrid& grid, const std::vector<OuterCell>& outerCells,
-                            const CellGrid& cellGrid, VulkanLevelBuffers& out, std::string* error,
-                            int32_t maxWalkSteps) {
-  out = VulkanLevelBuffers{};
+namespace vulkan_detail {
+
+VkResult createStagingBuffer(VkPhysicalDevice physicalDevice, VkDevice device, VkDeviceSize size,
+                             const std::function<void(char*)>& fill, VulkanStagingBuffer& out,
+                             std::string* what) {
+  out = VulkanStagingBuffer{};
+  const VkMemoryPropertyFlags host =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  VkResult r = createBuffer(device, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, &out.buffer, what);
+  VkMemoryPropertyFlags flags = 0;
+  if (r == VK_SUCCESS)
+    r = allocateAndBind(physicalDevice, device, out.buffer, host, host, &out.memory, &flags, what);
+  void* mapped = nullptr;
+  if (r == VK_SUCCESS) {
+    r = vkMapMemory(device, out.memory, 0, VK_WHOLE_SIZE, 0, &mapped);
+    if (r != VK_SUCCESS) *what = "vkMapMemory failed";
+  }
+  if (r != VK_SUCCESS) {
+    destroyStagingBuffer(device, out);
+    *what = "staging buffer: " + *what;
+    return r;
+  }
+  fill(static_cast<char*>(mapped));
+  vkUnmapMemory(device, out.memory);
+  out.size = size;
+  return VK_SUCCESS;
+}
+
+VkResult submitAndWait(VkDevice device, VkQueue queue, VkCommandPool pool,
+                       const std::function<void(VkCommandBuffer)>& record, std::string* what) {
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = pool;
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkResult r = vkAllocateCommandBuffers(device, &cai, &cmd);
+  if (r != VK_SUCCESS) return *what = "vkAllocateCommandBuffers failed", r;
+  VkFence fence = VK_NULL_HANDLE;
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  r = vkBeginCommandBuffer(cmd, &begin);
+  if (r != VK_SUCCESS) {
+    *what = "vkBeginCommandBuffer failed";
+  } else {
+    record(cmd);
+    r = vkEndCommandBuffer(cmd);
+    if (r != VK_SUCCESS) *what = "vkEndCommandBuffer failed";
+  }
+  if (r == VK_SUCCESS) {
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    r = vkCreateFence(device, &fci, nullptr, &fence);
+    if (r != VK_SUCCESS) *what = "vkCreateFence failed";
+  }
+  if (r == VK_SUCCESS) {
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    r = vkQueueSubmit(queue, 1, &submit, fence);
+    if (r != VK_SUCCESS) *what = "vkQueueSubmit failed";
+  }
+  if (r == VK_SUCCESS) {
+    r = vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX);
+    if (r != VK_SUCCESS) *what = "vkWaitForFences failed";
+  }
+  if (fence != VK_NULL_HANDLE) vkDestroyFence(device, fence, nullptr);
+  vkFreeCommandBuffers(device, pool, 1, &cmd);
+  return r;
+}
+
+}  // namespace vulkan_detail
+
+bool levelBuffersDeviceLocal(const VulkanLevelBuffers& buffers) {
+  for (int i = 0; i < int(kGpuBindingCount); ++i)
+    if (buffers.buffers[i] == VK_NULL_HANDLE ||
+        !(buffers.memoryFlags[i] & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT))
+      return false;
+  return true;
+}
+
+void destroyStagingBuffer(VkDevice device, VulkanStagingBuffer& staging) {
+  if (staging.buffer != VK_NULL_HANDLE) vkDestroyBuffer(device, staging.buffer, nullptr);
+  if (staging.memory != VK_NULL_HANDLE) vkFreeMemory(device, staging.memory, nullptr);
+  staging = VulkanStagingBuffer{};
+}
+
+bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vector<OuterCell>& outerCells,
+                      const CellGrid& cellGrid, PackedLevelBuffers& out, std::string* error,
+                      int32_t maxWalkSteps) {
+  out = PackedLevelBuffers{};
+  const auto fail = [&] {
+    out = PackedLevelBuffers{};
+    return false;
+  };
   const size_t cells =
       size_t(std::max(grid.dims.x, 0)) * size_t(std::max(grid.dims.y, 0)) * size_t(std::max(grid.dims.z, 0));
   if (!level.tets.empty() && (cells == 0 || grid.startTet.size() != cells)) {
     if (error) *error = "start grid does not match its dims (build it with ProbeQuery on this level)";
-    return VK_ERROR_INITIALIZATION_FAILED;
+    return fail();
   }
 
   // The shader indexes with these without bounds checks: an index out of range would read outside a buffer.
@@ -87,21 +191,21 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     if (error)
       *error = "level has " + std::to_string(level.sh.size()) + " SH for " + std::to_string(probeCount) +
                " probes";
-    return VK_ERROR_INITIALIZATION_FAILED;
+    return fail();
   }
   for (int64_t t = 0; t < tetCount; ++t) {
     const Tet& tet = level.tets[size_t(t)];
     for (int i = 0; i < 4; ++i) {
       if (tet.v[i] < 0 || tet.v[i] >= probeCount || tet.n[i] < -1 || tet.n[i] >= tetCount) {
         if (error) *error = "tet " + std::to_string(t) + " has a probe or neighbour index out of range";
-        return VK_ERROR_INITIALIZATION_FAILED;
+        return fail();
       }
     }
   }
   for (int32_t s : grid.startTet) {
     if (s < 0 || s >= tetCount) {
       if (error) *error = "start grid names tet " + std::to_string(s) + " of " + std::to_string(tetCount);
-      return VK_ERROR_INITIALIZATION_FAILED;
+      return fail();
     }
   }
 
@@ -113,7 +217,7 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
       ok = ok && c.v[i] >= 0 && c.v[i] < probeCount && c.n[i] >= -1 && c.n[i] < cellCount;
     if (!ok) {
       if (error) *error = "outer cell " + std::to_string(k) + " has an index out of range";
-      return VK_ERROR_INITIALIZATION_FAILED;
+      return fail();
     }
   }
 
@@ -127,11 +231,11 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     for (const BspNode& n : cellGrid.nodes) ok = ok && validChild(n.child[0]) && validChild(n.child[1]);
     if (!ok) {
       if (error) *error = "cell grid has an index out of range";
-      return VK_ERROR_INITIALIZATION_FAILED;
+      return fail();
     }
   }
 
-  std::vector<char> data[kGpuBindingCount];
+  std::vector<char>* data = out.bytes;
   appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
   appendBytes(data[kGpuBindingProbes], level.probes.data(), level.probes.size());
   std::vector<ShHalf> shHalf(level.sh.size());
@@ -141,7 +245,7 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
         *error = "probe " + std::to_string(p) +
                  " has an SH coefficient that is not finite or beyond half "
                  "precision's range (|c| > 2.1e9)";
-      return VK_ERROR_INITIALIZATION_FAILED;
+      return fail();
     }
   appendBytes(data[kGpuBindingProbes], shHalf.data(), shHalf.size());
   GpuGridHeader header{};
@@ -193,29 +297,107 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, co
     appendBytes(data[kGpuBindingOcclusion], occ.shadowMaps.data(), occ.shadowMaps.size());
   }
 
+  // Never zero-sized (Vulkan forbids it); zero-padded to a multiple of 64 bytes.
+  for (std::vector<char>& bytes : out.bytes)
+    bytes.resize(std::max<size_t>(64, (bytes.size() + 63) / 64 * 64));
+  return true;
+}
+
+VkResult cmdUploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkCommandBuffer cmd,
+                               const Level& level, const StartGrid& grid,
+                               const std::vector<OuterCell>& outerCells, const CellGrid& cellGrid,
+                               VkPipelineStageFlags shaderStages, VulkanLevelBuffers& out,
+                               VulkanStagingBuffer& staging, std::string* error, int32_t maxWalkSteps) {
+  out = VulkanLevelBuffers{};
+  staging = VulkanStagingBuffer{};
+  PackedLevelBuffers packed;
+  if (!packLevelBuffers(level, grid, outerCells, cellGrid, packed, error, maxWalkSteps))
+    return VK_ERROR_INITIALIZATION_FAILED;
+
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physicalDevice, &props);
+  VkDeviceSize offsets[kGpuBindingCount] = {}, total = 0;
   for (int i = 0; i < int(kGpuBindingCount); ++i) {
-    // Never zero-sized (Vulkan forbids it); rounded up to 64 bytes.
-    const VkDeviceSize size = std::max<VkDeviceSize>(64, (data[i].size() + 63) / 64 * 64);
+    const VkDeviceSize size = packed.bytes[i].size();
     if (size > props.limits.maxStorageBufferRange) {
-      destroyLevelBuffers(device, out);
       if (error)
         *error = std::string(bindingName(i)) + " buffer needs " + std::to_string(size) +
                  " bytes, over the device's maxStorageBufferRange " +
                  std::to_string(props.limits.maxStorageBufferRange);
       return VK_ERROR_OUT_OF_DEVICE_MEMORY;
     }
+    offsets[i] = total;  // multiples of 64, as every size is
+    total += size;
+  }
+
+  // The level buffers first (they may fall back to host-visible memory), then the staging buffer.
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                   VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+  for (int i = 0; i < int(kGpuBindingCount); ++i) {
     std::string what;
-    const VkResult r =
-        createFilledBuffer(physicalDevice, device, data[i], size, &out.buffers[i], &out.memory[i], &what);
+    VkResult r = createBuffer(device, packed.bytes[i].size(), usage, &out.buffers[i], &what);
+    if (r == VK_SUCCESS)
+      r = allocateAndBind(physicalDevice, device, out.buffers[i], VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT,
+                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, &out.memory[i], &out.memoryFlags[i], &what);
     if (r != VK_SUCCESS) {
       destroyLevelBuffers(device, out);
       if (error)
         *error = std::string(bindingName(i)) + " buffer: " + what + " (VkResult " + std::to_string(r) + ")";
       return r;
     }
-    out.sizes[i] = size;
+    out.sizes[i] = packed.bytes[i].size();
+  }
+  std::string what;
+  const VkResult r = vulkan_detail::createStagingBuffer(
+      physicalDevice, device, total,
+      [&](char* mapped) {
+        for (int i = 0; i < int(kGpuBindingCount); ++i)
+          std::memcpy(mapped + offsets[i], packed.bytes[i].data(), packed.bytes[i].size());
+      },
+      staging, &what);
+  if (r != VK_SUCCESS) {
+    destroyLevelBuffers(device, out);
+    if (error) *error = what + " (VkResult " + std::to_string(r) + ")";
+    return r;
+  }
+
+  for (int i = 0; i < int(kGpuBindingCount); ++i) {
+    const VkBufferCopy region{offsets[i], 0, out.sizes[i]};
+    vkCmdCopyBuffer(cmd, staging.buffer, out.buffers[i], 1, &region);
+    out.stagedBytes += out.sizes[i];
+  }
+  // The copies before the shader's reads and before later transfer writes (cmdUpdateLevelSh, writeLevelSh).
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  barrier.dstAccessMask =
+      VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, shaderStages | VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                       1, &barrier, 0, nullptr, 0, nullptr);
+  return VK_SUCCESS;
+}
+
+VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkQueue queue,
+                            VkCommandPool pool, const Level& level, const StartGrid& grid,
+                            const std::vector<OuterCell>& outerCells, const CellGrid& cellGrid,
+                            VulkanLevelBuffers& out, std::string* error, int32_t maxWalkSteps) {
+  out = VulkanLevelBuffers{};
+  VulkanStagingBuffer staging;
+  VkResult recorded = VK_SUCCESS;
+  std::string what;
+  const VkResult r = vulkan_detail::submitAndWait(
+      device, queue, pool,
+      [&](VkCommandBuffer cmd) {
+        recorded =
+            cmdUploadLevelBuffers(physicalDevice, device, cmd, level, grid, outerCells, cellGrid,
+                                  VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, out, staging, error, maxWalkSteps);
+      },
+      &what);
+  destroyStagingBuffer(device, staging);
+  if (recorded != VK_SUCCESS) return recorded;  // `error` set, nothing allocated
+  if (r != VK_SUCCESS) {
+    destroyLevelBuffers(device, out);
+    if (error) *error = "level upload: " + what + " (VkResult " + std::to_string(r) + ")";
+    return r;
   }
   return VK_SUCCESS;
 }

@@ -5,9 +5,13 @@
 // - per pixel: the irradiance at each of the sphere's surface points with its own normal, in one
 //   irradianceBatch call (CPU; an engine would run the same lookup per pixel in a shader, tetraprobe.glsl).
 // It prints a line per frame and the per-object error against the per-pixel answer.
-// Left out: rendering (no window), the GPU path (vulkan_upload.h) and run-time SH updates (probe_update.h).
+// Then the GPU side (gpu_level.cpp, skipped without a Vulkan device): the level's six storage buffers
+// uploaded to device-local memory through a staging copy recorded into the engine's command buffer, the
+// buffers the engine owns printed, and part of the level relit in place (setProbeSh + cmdUpdateLevelSh).
+// Left out: rendering (no window, no shader reading the buffers).
 // Checks its own results (exit 1 on failure): the cached walk answers as an uncached locate, every value is
-// finite, and the sphere is darker in the room the lamp does not see (two_rooms: x > 4.2) than in the lit one.
+// finite, the sphere is darker in the room the lamp does not see (two_rooms: x > 4.2) than in the lit one,
+// and the GPU's probe buffer after the relight equals the packing of the relit level byte for byte.
 //
 // Usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]  (default path: the two_rooms sample's rooms)
 #include <cmath>
@@ -17,6 +21,8 @@
 
 #include <tetraprobe/runtime/level.h>
 #include <tetraprobe/runtime/query.h>
+
+#include "gpu_level.h"
 
 namespace {
 
@@ -92,6 +98,7 @@ int main(int argc, char** argv) {
         meanPixel > 0 ? 100.0 * meanError / meanPixel : 0.0);
   }
   if (argc == 2) ok = ok && lastRoom < firstRoom;  // the default path ends in the unlit room
+  ok = runGpuLevel(level, query) && ok;            // relights `level`: after the CPU frames
   std::printf("%s\n", ok ? "ok" : "FAILED");
   return ok ? 0 : 1;
 }

@@ -113,13 +113,15 @@ class PointLookup {
   }
 
   VkDevice device() const { return ctx_.device(); }
+  const VulkanContext& context() const { return ctx_; }
 
   // Uploads `level` (with `query`'s acceleration data); returns its index for run().
   size_t upload(const Level& level, const ProbeQuery& query) {
     VulkanLevelBuffers b;
     std::string error;
-    const VkResult r = uploadLevelBuffers(ctx_.physicalDevice(), ctx_.device(), level, query.startGrid(),
-                                          query.outerCells(), query.cellGrid(), b, &error);
+    const VkResult r =
+        uploadLevelBuffers(ctx_.physicalDevice(), ctx_.device(), ctx_.queue(), ctx_.commandPool(), level,
+                           query.startGrid(), query.outerCells(), query.cellGrid(), b, &error);
     if (r != VK_SUCCESS) throw std::runtime_error("upload: " + error);
     uploads_.push_back(b);
     sets_.push_back(allocateSet(setLayouts_[0]));
@@ -127,6 +129,12 @@ class PointLookup {
     return uploads_.size() - 1;
   }
   const VulkanLevelBuffers& buffers(size_t i) const { return uploads_[i]; }
+
+  // writeLevelSh (staged, waited for) of level.sh[first, first + count) into upload i.
+  VkResult writeSh(size_t i, const Level& level, size_t first, size_t count, std::string* error) {
+    return writeLevelSh(ctx_.physicalDevice(), ctx_.device(), ctx_.queue(), ctx_.commandPool(), uploads_[i],
+                        level, first, count, error);
+  }
 
   // One submission: `record` (if any: e.g. an SH update), then the lookup of every point against upload i.
   std::vector<glm::vec3> run(size_t i, const std::function<void(VkCommandBuffer)>& record = {}) {

@@ -124,7 +124,7 @@ std::vector<PointNormal> makePoints(size_t n) {
 }
 
 // The whole relight, in the order an engine does it: upload a level lit by daylight; switch the lamp on for
-// every probe (setProbeSh + writeLevelSh while the GPU is idle); then relight one layer of probes in a
+// every probe (setProbeSh + writeLevelSh, a staged copy waited for); then relight one layer of probes in a
 // command buffer that also renders (cmdUpdateLevelSh before the lookup). After each step the CPU query of the
 // updated level equals, bit for bit, that of a level built from scratch with the same SH (same tets: the
 // tetrahedralization does not look at the SH), and the GPU lookup of the updated buffers equals, bit for bit,
@@ -142,7 +142,7 @@ TEST(ShUpdate, RelitLevelMatchesFreshLevelOnCpuAndGpu) {
     before = gpu.run(live);
     EXPECT_LT(worstRelative(before, cpuIrradiance(query, pts)), 1e-4) << "GPU against CPU before any update";
 
-    // 1. Every probe, through a mapping.
+    // 1. Every probe, through a staged copy (writeLevelSh).
     const Level lampLevel = buildLevel([](size_t, const glm::vec3& p) { return lamp(p); });
     ASSERT_EQ(lampLevel.tets.size(), level.tets.size());
     ASSERT_EQ(std::memcmp(lampLevel.tets.data(), level.tets.data(), sizeof(Tet) * level.tets.size()), 0)
@@ -150,8 +150,7 @@ TEST(ShUpdate, RelitLevelMatchesFreshLevelOnCpuAndGpu) {
     const ProbeQuery lampQuery(lampLevel);
     ASSERT_TRUE(setProbeSh(level, 0, lampLevel.sh));
     std::string error;
-    ASSERT_EQ(writeLevelSh(gpu.device(), gpu.buffers(live), level, 0, level.sh.size(), &error), VK_SUCCESS)
-        << error;
+    ASSERT_EQ(gpu.writeSh(live, level, 0, level.sh.size(), &error), VK_SUCCESS) << error;
     const std::vector<glm::vec3> cpuLamp = cpuIrradiance(lampQuery, pts);
     EXPECT_EQ(countDifferent(cpuIrradiance(query, pts), cpuLamp), 0u) << "CPU: relit level against fresh";
     const std::vector<glm::vec3> relit = gpu.run(live);
@@ -185,18 +184,15 @@ TEST(ShUpdate, RelitLevelMatchesFreshLevelOnCpuAndGpu) {
     std::printf("partial update of %zu probes changed %zu of %zu points\n", count, changed, pts.size());
 
     // 3. Out-of-range and mismatched requests are refused and leave the buffers as they were.
-    EXPECT_EQ(writeLevelSh(gpu.device(), gpu.buffers(live), level, level.sh.size(), 1, &error),
-              VK_ERROR_INITIALIZATION_FAILED);
+    EXPECT_EQ(gpu.writeSh(live, level, level.sh.size(), 1, &error), VK_ERROR_INITIALIZATION_FAILED);
     EXPECT_NE(error.find("outside"), std::string::npos) << error;
-    EXPECT_EQ(writeLevelSh(gpu.device(), gpu.buffers(live), level, 1, level.sh.size(), &error),
-              VK_ERROR_INITIALIZATION_FAILED);
+    EXPECT_EQ(gpu.writeSh(live, level, 1, level.sh.size(), &error), VK_ERROR_INITIALIZATION_FAILED);
     Level bigger = level;
     for (int k = 0; k < 200; ++k) {
       bigger.probes.push_back(glm::vec3(0.0f));
       bigger.sh.push_back(ShRgb{});
     }
-    EXPECT_EQ(writeLevelSh(gpu.device(), gpu.buffers(live), bigger, 0, 1, &error),
-              VK_ERROR_INITIALIZATION_FAILED)
+    EXPECT_EQ(gpu.writeSh(live, bigger, 0, 1, &error), VK_ERROR_INITIALIZATION_FAILED)
         << "a level with more probes than the buffer was uploaded with";
     EXPECT_NE(error.find("cannot hold"), std::string::npos) << error;
     recorded = true;

@@ -143,8 +143,7 @@ TEST(Relight, BakedLevelRelitInPlaceMatchesFreshBakeOnCpuAndGpu) {
     const std::vector<glm::vec3> gpuDay = gpu.run(live);
     ASSERT_TRUE(setProbeSh(day, 0, lamp.sh));
     std::string error;
-    ASSERT_EQ(writeLevelSh(gpu.device(), gpu.buffers(live), day, 0, day.sh.size(), &error), VK_SUCCESS)
-        << error;
+    ASSERT_EQ(gpu.writeSh(live, day, 0, day.sh.size(), &error), VK_SUCCESS) << error;
     EXPECT_EQ(test::countDifferent(test::cpuIrradiance(dayQuery, pts), cpuLamp), 0u)
         << "CPU: the relit level against the fresh bake";
     const std::vector<glm::vec3> gpuRelit = gpu.run(live);
