@@ -21,6 +21,7 @@
 
 #include "image_compare.h"
 #include "level_bytes.h"
+#include "missing_capability.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/streaming.h"
@@ -932,7 +933,7 @@ TEST_F(Cli, RenderFullAndDebugModesWriteImagesAndPassTimings) {
                            " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24";
   const CliRun full = run(base + " --mode full -o " + path("full.png").string() + " --frames 3 --json " +
                           path("full.json").string() + " --shadow-map-size 256");
-  if (full.err.find("no Vulkan") != std::string::npos) GTEST_SKIP() << full.err;
+  if (tetraprobe::test::isNoVulkan(full.err)) TETRAPROBE_SKIP_MISSING(full.err);
   ASSERT_EQ(full.code, 0) << full.err;
   EXPECT_TRUE(fs::file_size(path("full.png")) > 0);
   const auto j = nlohmann::json::parse(slurp(path("full.json")));
@@ -963,7 +964,7 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
   const std::string view = " --eye 3.5,1.5,3.5 --target 1,1,1 --size 32x24";
   const CliRun b =
       run("bench render " + path("box.obj").string() + " " + level + view + " --frames 2 --json");
-  if (b.err.find("no Vulkan") != std::string::npos) GTEST_SKIP() << b.err;
+  if (tetraprobe::test::isNoVulkan(b.err)) TETRAPROBE_SKIP_MISSING(b.err);
   ASSERT_EQ(b.code, 0) << b.err;
   const auto j = nlohmann::json::parse(b.out);
   EXPECT_EQ(j.at("width").get<int>(), 32);
