@@ -3,11 +3,10 @@
 // clone), unless the environment variable TETRAPROBE_REQUIRE_ALL is set to anything but "" or "0". Then the
 // same test fails, so a CI run (.ci/run exports TETRAPROBE_REQUIRE_ALL=1) cannot pass green having compared no
 // GPU pixel with the CPU (the only guard of the GLSL mirror of the lookup), rendered nothing, or loaded no
-// shared scene. The skips that go through it: no Vulkan driver or device (tests/render, eval, visual, cli),
-// a queue without timestamps (RenderTimings; lavapipe has them), the shared scenes absent (SharedScenes.*),
-// and the visual references being rewritten instead of compared (TETRAPROBE_UPDATE_REFERENCES). The one skip
-// that does not is OcclusionScene.VeachAjarFigures: a measurement that runs only when asked for with
-// TETRAPROBE_OCCLUSION_SCENE, not a capability the machine lacks.
+// shared scene. Every skip in tests/ goes through it: no Vulkan driver or device (tests/render, eval, visual,
+// cli), a queue without timestamps (RenderTimings; lavapipe has them), the shared scenes absent
+// (SharedScenes.*, OcclusionScene.VeachAjarFigures), and the visual references being rewritten instead of
+// compared (TETRAPROBE_UPDATE_REFERENCES).
 #pragma once
 
 #include <gtest/gtest.h>
