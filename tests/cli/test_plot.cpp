@@ -185,6 +185,22 @@ TEST(EvalPlot, MarkersSitWhereTheirValuesPutThem) {
   EXPECT_GT(ra.y, rb.y + 20);
 }
 
+// A point with no time (<= 0) is drawn in the bytes panel only; the time panel without any time is empty.
+TEST(EvalPlot, PointsWithoutATimeAreLeftOutOfTheTimePanel) {
+  std::vector<PlotPoint> points = samplePoints();
+  points[0].time = 0.0;  // tet
+  const Rgb8Image im = decodePng(evalPlot(points, PlotOptions{}, PlotFormat::kPng, 2.0));
+  const uint32_t tet = evalPlotColor("tet", 0), nearest = evalPlotColor("nearest", 1);
+  const int legendTop = 2 * 320;
+  EXPECT_GT(blob(im, tet, 0, 0, 920, legendTop).count, 100);
+  EXPECT_EQ(blob(im, tet, 920, 0, 1840, legendTop).count, 0);
+  EXPECT_GT(blob(im, nearest, 920, 0, 1840, legendTop).count, 100);
+  for (PlotPoint& p : points) p.time = -1.0;
+  const Rgb8Image none = decodePng(evalPlot(points, PlotOptions{}, PlotFormat::kPng, 2.0));
+  for (const auto& [method, index] : {std::pair<std::string, size_t>{"tet", 0}, {"nearest", 1}})
+    EXPECT_EQ(blob(none, evalPlotColor(method, index), 920, 0, 1840, legendTop).count, 0) << method;
+}
+
 // The title is set in an antialiased font: ink with many grey levels where it is, none without it.
 TEST(EvalPlot, TitleIsSetInAnAntialiasedFont) {
   PlotOptions po;

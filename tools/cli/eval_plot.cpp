@@ -13,6 +13,7 @@
 #include <memory>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 namespace tetraprobe::cli {
 
@@ -182,13 +183,23 @@ void panel(Pen& pen, const std::vector<PlotPoint>& points, bool bytesAxis, doubl
   ymax = std::ceil(ymax / ystep) * ystep;
   auto X = [&](double v) { return x0 + (std::log10(v) - lx0) / (lx1 - lx0) * w; };
   auto Y = [&](double v) { return y0 + h - v / ymax * h; };
-  for (double d = std::floor(lx0); d <= lx1; d += 1.0)
-    for (const double m : {1.0, 2.0, 5.0}) {
-      const double v = m * std::pow(10.0, d);
-      if (std::log10(v) < lx0 || std::log10(v) > lx1) continue;
-      pen.polyline({X(v), y0, X(v), y0 + h}, m == 1.0 ? kMajorGrid : kMinorGrid, 1.0);
-      pen.text(X(v), y0 + h + 16, tickLabel(v, bytesAxis), Anchor::kMiddle, 11);
-    }
+  // Tick labels: every 10^d first, then 2 and 5 x 10^d where they keep 6 units from every label placed.
+  std::vector<std::pair<double, double>> placed;  // [left, right] of the labels drawn
+  for (const bool major : {true, false})
+    for (double d = std::floor(lx0); d <= lx1; d += 1.0)
+      for (const double m : {1.0, 2.0, 5.0}) {
+        const double v = m * std::pow(10.0, d);
+        if ((m == 1.0) != major || std::log10(v) < lx0 || std::log10(v) > lx1) continue;
+        pen.polyline({X(v), y0, X(v), y0 + h}, major ? kMajorGrid : kMinorGrid, 1.0);
+        const std::string label = tickLabel(v, bytesAxis);
+        const double half = 0.5 * pen.textWidth(label, 11), l = X(v) - half, r = X(v) + half;
+        if (!major && std::any_of(placed.begin(), placed.end(), [&](const std::pair<double, double>& p) {
+              return l < p.second + 6 && r > p.first - 6;
+            }))
+          continue;
+        placed.push_back({l, r});
+        pen.text(X(v), y0 + h + 16, label, Anchor::kMiddle, 11);
+      }
   for (double v = 0.0; v <= ymax + 1e-9; v += ystep) {
     char buf[16];
     std::snprintf(buf, sizeof buf, "%g", std::round(v * 1000.0) / 1000.0);
