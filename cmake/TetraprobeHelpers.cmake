@@ -40,11 +40,13 @@ function(tetraprobe_add_module name)
   set_target_properties(tetraprobe_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()
 
-# tetraprobe_add_test(NAME SOURCES ... LIBS ...): one gtest executable, tests discovered for ctest.
+# tetraprobe_add_test(NAME SOURCES ... LIBS ...): one gtest executable, tests discovered for ctest. Every test
+# sees tests/common (missing_capability.h: skip, or fail under TETRAPROBE_REQUIRE_ALL=1).
 function(tetraprobe_add_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main tetraprobe_warnings)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/common)
   target_compile_definitions(${name} PRIVATE
     TETRAPROBE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     TETRAPROBE_SHARED_SCENES="${PROJECT_SOURCE_DIR}/../shared/scenes")
@@ -56,7 +58,7 @@ endfunction()
 function(tetraprobe_check_licence_boundary target)
   get_target_property(libs ${target} LINK_LIBRARIES)
   foreach(lib IN LISTS libs)
-    if(lib MATCHES "CGAL|TetGen|tet$|embree|TBB|gmp|mpfr")
+    if(lib MATCHES "CGAL|TetGen|tet$|embree|TBB|gmp|mpfr|CAIRO|cairo")
       message(FATAL_ERROR "Licence boundary: ${target} links build-side library '${lib}'")
     endif()
   endforeach()

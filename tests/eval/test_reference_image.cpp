@@ -12,6 +12,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "missing_capability.h"
 #include "test_levels.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/reference_image.h"
@@ -169,7 +170,7 @@ std::optional<RenderResult> vulkanRender(const Scene& scene, const Level& level,
   try {
     return renderLevel(toRenderMesh(scene), level, query, view);
   } catch (const std::runtime_error& e) {
-    if (std::string(e.what()).find("no Vulkan") == std::string::npos) throw;
+    if (!test::isNoVulkan(e.what())) throw;
     why = e.what();
     return std::nullopt;
   }
@@ -216,7 +217,7 @@ TEST(ReferenceImage, GBufferAgreesWithVulkanRenderer) {
   const RenderView view = cratesView();
   std::string why;
   const std::optional<RenderResult> vk = vulkanRender(scene, level, query, view, why);
-  if (!vk) GTEST_SKIP() << why;
+  if (!vk) TETRAPROBE_SKIP_MISSING(why);
   const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view);
   const Agreement a = compare(*vk, g, level.origin, 2e-3);
   std::printf("mask agreement %.4f, position agreement %.4f (%zu Vulkan hits, %zu reference hits of %d)\n",
@@ -274,7 +275,7 @@ TEST(ReferenceImage, GBufferStepsThroughBackFacesLikeTheRasterizer) {
   ASSERT_GT(backFirst, size_t(view.width * view.height / 4)) << "the view must look through back faces";
   std::string why;
   const std::optional<RenderResult> vk = vulkanRender(scene, level, query, view, why);
-  if (!vk) GTEST_SKIP() << why;
+  if (!vk) TETRAPROBE_SKIP_MISSING(why);
   const ReferenceGBuffer g = traceReferenceGBuffer(tracer, view);
   const Agreement a = compare(*vk, g, level.origin, 2e-3);
   std::printf("%zu of %d rays meet a back face first; mask agreement %.4f, position agreement %.4f\n",

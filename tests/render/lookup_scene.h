@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "missing_capability.h"
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
@@ -120,7 +121,7 @@ inline RenderView makeView(RenderMode mode, int width = 320, int height = 180) {
   return v;
 }
 
-// Renders, or returns false after GTEST_SKIP-worthy failure (no Vulkan device).
+// Renders, or returns false (and the reason in `skip`) on a machine without a Vulkan driver or device.
 inline bool render(const RenderMesh& mesh, const Level& level, const ProbeQuery& query,
                    const RenderView& view, RenderResult& out, std::string& skip,
                    const RenderOptions& options = {}) {
@@ -129,7 +130,7 @@ inline bool render(const RenderMesh& mesh, const Level& level, const ProbeQuery&
     return true;
   } catch (const std::runtime_error& e) {
     const std::string what = e.what();
-    if (what.find("no Vulkan") != std::string::npos) {
+    if (isNoVulkan(what)) {
       skip = what;
       return false;
     }
@@ -137,10 +138,10 @@ inline bool render(const RenderMesh& mesh, const Level& level, const ProbeQuery&
   }
 }
 
-#define RENDER_OR_SKIP(mesh, level, query, view, out)                         \
-  do {                                                                        \
-    std::string skip_;                                                        \
-    if (!render(mesh, level, query, view, out, skip_)) GTEST_SKIP() << skip_; \
+#define RENDER_OR_SKIP(mesh, level, query, view, out)                                  \
+  do {                                                                                 \
+    std::string skip_;                                                                 \
+    if (!render(mesh, level, query, view, out, skip_)) TETRAPROBE_SKIP_MISSING(skip_); \
   } while (0)
 
 inline glm::vec3 px3(const Image& im, size_t i) {

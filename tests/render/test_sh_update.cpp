@@ -16,6 +16,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "missing_capability.h"
 #include "point_lookup.h"
 #include "tetraprobe/runtime/probe_update.h"
 #include "tetraprobe/runtime/query.h"
@@ -206,7 +207,7 @@ TEST(ShUpdate, RelitLevelMatchesFreshLevelOnCpuAndGpu) {
               0u);
     EXPECT_FALSE(recorded);
   } catch (const std::runtime_error& e) {
-    if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
+    if (test::isNoVulkan(e.what())) TETRAPROBE_SKIP_MISSING(e.what());
     throw;
   }
 }

@@ -181,7 +181,8 @@ TEST(ShaderVariant, ShippingShadersHaveNoScanLoop) {
 struct Comparison {
   int pixels = 0, bad = 0;  // bad: relative error >= 1e-4 in some channel
   double worst = 0.0;
-  bool skipped = false;
+  bool skipped = false;  // no Vulkan driver or device: `why` says which
+  std::string why;
 };
 
 // Renders the lookup scene's irradiance with `options` and compares every geometry pixel with
@@ -195,6 +196,7 @@ Comparison compareWithCpu(const Level& level, const RenderOptions& options, Rend
   std::string skip;
   if (!render(makeMesh(), level, query, view, r, skip, options)) {
     c.skipped = true;
+    c.why = skip;
     return c;
   }
   for (size_t i = 0; i < size_t(view.width) * view.height; ++i) {
@@ -244,7 +246,7 @@ TEST(GpuVariants, EachVariantMatchesCpuOnTheLevelsThatUseIt) {
     seen.push_back(own);
     RenderResult r;
     const Comparison c = compareWithCpu(nl.level, RenderOptions{}, &r);
-    if (c.skipped) GTEST_SKIP() << "no Vulkan device";
+    if (c.skipped) TETRAPROBE_SKIP_MISSING(c.why);
     EXPECT_EQ(r.variant, own) << "the renderer specializes with the level's own variant";
     std::printf("%-12s variant %-38s %d pixels, worst relative error %.3g\n", nl.name, own.name().c_str(),
                 c.pixels, c.worst);
@@ -266,7 +268,7 @@ TEST(GpuVariants, VariantWithoutAFeatureTheLevelUsesDiffers) {
     RenderOptions options;
     options.variant = v;
     const Comparison c = compareWithCpu(level, options);
-    if (c.skipped) GTEST_SKIP() << "no Vulkan device";
+    if (c.skipped) TETRAPROBE_SKIP_MISSING(c.why);
     std::printf("variant %-28s on a level using everything: %d of %d pixels off by 1e-4 or more\n",
                 v.name().c_str(), c.bad, c.pixels);
     EXPECT_GT(c.bad, 500) << v.name();
@@ -282,7 +284,7 @@ TEST(GpuVariants, ShippingLookupEqualsDebugScanBuild) {
     level.occlusion = syntheticOcclusion(level);
     RenderResult shipping, debug;
     const Comparison a = compareWithCpu(level, RenderOptions{}, &shipping, cellSize);
-    if (a.skipped) GTEST_SKIP() << "no Vulkan device";
+    if (a.skipped) TETRAPROBE_SKIP_MISSING(a.why);
     RenderOptions options;
     options.lightingSpirv = kSpirv_lighting_debug_scan_comp;
     options.lightingSpirvBytes = sizeof(kSpirv_lighting_debug_scan_comp);

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
+#include "missing_capability.h"
 #include "scene_test_support.h"
 #include "tetraprobe/scene/load.h"
 
@@ -76,7 +77,7 @@ size_t droppedDegenerate(const Scene& s) {
 // Loaded + dropped-degenerate triangles must equal the README count; the drop may not exceed 2 %.
 void expectTriangles(const std::string& file, size_t expected, size_t emissive) {
   const auto path = kShared / file;
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
+  if (!std::filesystem::exists(path)) TETRAPROBE_SKIP_MISSING(path << " not present");
   const Scene s = loadScene(path.string());
   const size_t dropped = droppedDegenerate(s);
   EXPECT_EQ(s.triangles.size() + dropped, expected) << file;
@@ -125,7 +126,7 @@ TEST(SharedScenes, Dm4ishGlbTriangleCount) {
 
 TEST(SharedScenes, SponzaTexturesAllResolve) {
   const auto path = kShared / "sponza_dabrovic/sponza.obj";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
+  if (!std::filesystem::exists(path)) TETRAPROBE_SKIP_MISSING(path << " not present");
   const Scene s = loadScene(path.string());
   EXPECT_FALSE(test::anyWarningContains(s, "not found"));
   EXPECT_FALSE(test::anyWarningContains(s, "cannot decode"));
@@ -141,7 +142,7 @@ namespace {
 // loaders interpret Kd/baseColorFactor, map_Kd/baseColorTexture and Ke/emissiveFactor the same way.
 void expectObjAndGlbAgree(const std::string& obj, const std::string& glb) {
   if (!std::filesystem::exists(kShared / obj) || !std::filesystem::exists(kShared / glb))
-    GTEST_SKIP() << "shared scenes not present";
+    TETRAPROBE_SKIP_MISSING("shared scenes not present: " << kShared);
   const Scene a = loadScene((kShared / obj).string());
   const Scene b = loadScene((kShared / glb).string());
   size_t compared = 0;
@@ -175,9 +176,10 @@ namespace {
 // The measurement scene descriptions in samples/shared follow docs/scene_format.md: they load, warning-free
 // apart from dropped zero-area triangles, whenever the shared scenes are present.
 TEST(SharedScenes, SceneDescriptionsLoadWithoutUnexpectedWarnings) {
-  if (!std::filesystem::exists(kShared / "README.md")) GTEST_SKIP() << "shared scenes not present";
+  if (!std::filesystem::exists(kShared / "README.md"))
+    TETRAPROBE_SKIP_MISSING("shared scenes not present: " << kShared);
   const auto dir = kSource / "samples/shared";
-  if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not present";
+  ASSERT_TRUE(std::filesystem::exists(dir)) << dir << " is part of the repository";
   size_t loaded = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();

@@ -17,6 +17,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "missing_capability.h"
 #include "point_lookup.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/probe_update.h"
@@ -154,7 +155,7 @@ TEST(Relight, BakedLevelRelitInPlaceMatchesFreshBakeOnCpuAndGpu) {
     std::printf("GPU against CPU on the relit level: worst relative difference %.2e\n", worst);
     EXPECT_LT(worst, 1e-4);
   } catch (const std::runtime_error& e) {
-    if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
+    if (test::isNoVulkan(e.what())) TETRAPROBE_SKIP_MISSING(e.what());
     throw;
   }
 }

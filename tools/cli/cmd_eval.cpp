@@ -15,7 +15,6 @@
 #include "args.h"
 #include "commands.h"
 #include "eval_plot.h"
-#include "image_compare.h"
 #include "pipeline.h"
 #include "pipeline_options.h"
 #include "render_view.h"
@@ -635,12 +634,10 @@ int cmdEval(int argc, char** argv) {
       }
     }
     const std::string plot = args.str("--plot");
-    if (plotIsPng(plot)) {
-      writeImage8(plot, evalPlotImage(points, po));
-    } else {
-      std::string error;
-      if (!writeFileAtomic(plot, evalPlotSvg(points, po), &error)) throw std::runtime_error(error);
-    }
+    std::string error;
+    if (!writeFileAtomic(plot, evalPlot(points, po, plotIsPng(plot) ? PlotFormat::kPng : PlotFormat::kSvg),
+                         &error))
+      throw std::runtime_error(error);
   }
 
   if (args.has("--points-out")) {

@@ -1,11 +1,12 @@
 // `tetraprobe eval --plot`: error against memory and against run time, one point per method (and per level of
-// a sweep), as a chart of two panels written as SVG or as a PNG raster (plot_canvas.h). No dependencies.
+// a sweep), as a chart of two panels drawn once with cairo onto an SVG or a PNG surface. cairo is LGPL/MPL:
+// the build side only (tools/cli; cmake/TetraprobeHelpers.cmake keeps it out of the runtime).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
-
-#include "image_compare.h"
 
 namespace tetraprobe::cli {
 
@@ -23,13 +24,27 @@ struct PlotOptions {
   bool pareto = false;  // mark each panel's Pareto front (lowest error for at most that x), per measure
 };
 
-// The SVG document (UTF-8 text): left panel error against bytes, right panel error against `time`; both x
-// axes log10, y linear from 0. With options.pareto, the points on each measure's Pareto front over all
-// methods are ringed and joined by a dashed step line.
-std::string evalPlotSvg(const std::vector<PlotPoint>& points, const PlotOptions& options);
+enum class PlotFormat { kSvg, kPng };
 
-// The same chart as a raster, `scale` pixels per SVG user unit (920 x 372 units for up to four methods, a
-// legend row more per four), antialiased, text in the bitmap font. Write it with writeImage8.
-Rgb8Image evalPlotImage(const std::vector<PlotPoint>& points, const PlotOptions& options, double scale = 2.0);
+// The chart's size in SVG user units: 920 wide; 372 high for up to four methods, the legend taking a row of
+// 28 more per further four.
+double evalPlotWidth();
+double evalPlotHeight(size_t methods);
+
+// The colour of a series as 0xRRGGBB: fixed for the methods eval reports ("tet" 0x1b9e77, "nearest"
+// 0xd95f02, ...), else the spare colour for `index`, the method's place in order of first appearance.
+uint32_t evalPlotColor(const std::string& method, size_t index);
+
+// The chart as the bytes of a file. Left panel: error against bytes; right panel: error against `time`
+// (options.timeAxis), "not measured" when no point has a time; both x axes log10, y linear from 0. Each
+// method's points are joined in x order: filled circles for mean_rel_error, open squares on a dashed line for
+// gross_error, in evalPlotColor; a legend row per four methods. With options.pareto, the points on each
+// measure's Pareto front over all methods are ringed and joined by a dashed black step line. Text is set in
+// the fontconfig "sans-serif" face (DejaVu Sans on Debian), antialiased.
+//   kSvg: an SVG 1.1 document of evalPlotWidth() x evalPlotHeight() user units (text as glyph outlines).
+//   kPng: an 8-bit RGB PNG of round(width * scale) x round(height * scale) pixels, `scale` > 0.
+// Throws std::runtime_error when cairo fails (out of memory, a size cairo refuses).
+std::string evalPlot(const std::vector<PlotPoint>& points, const PlotOptions& options, PlotFormat format,
+                     double scale = 2.0);
 
 }  // namespace tetraprobe::cli

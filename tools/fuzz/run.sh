@@ -3,7 +3,8 @@
 # build stays GCC), makes the seed corpora from the bundled sample, and runs each harness for SECONDS.
 # Usage: tools/fuzz/run.sh TETRAPROBE_BINARY FUZZ_BUILD_DIR SECONDS
 # Skips (exit 0, one line) when clang cannot link a libFuzzer program (Debian 12: clang-14 and
-# libclang-rt-14-dev, which tools/setup/setup.sh installs). A crash, sanitizer report, leak or timeout fails
+# libclang-rt-14-dev, which tools/setup/setup.sh installs), or fails (exit 1) there when TETRAPROBE_REQUIRE_ALL
+# is set to anything but "" or "0" (CI: .ci/run; tests/common/missing_capability.h reads it too). A crash, sanitizer report, leak or timeout fails
 # (exit 1) and leaves the input in FUZZ_BUILD_DIR/artifacts/: reproduce with
 #   FUZZ_BUILD_DIR/bin/tetraprobe_fuzz_level ARTIFACT
 # then commit it as a regression input with a test that loads it through the normal build and expects a
@@ -22,7 +23,12 @@ probe=$(mktemp -d)
 trap 'rm -rf "$probe"' EXIT
 echo 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }' > "$probe/f.cpp"
 if ! command -v "$CXX" >/dev/null 2>&1 || ! "$CXX" -fsanitize=fuzzer "$probe/f.cpp" -o "$probe/f" 2>/dev/null; then
-  echo "fuzz: skipped: $CXX cannot link a libFuzzer program (install clang and libclang-rt-14-dev)"
+  why="$CXX cannot link a libFuzzer program (install clang and libclang-rt-14-dev)"
+  if [ -n "${TETRAPROBE_REQUIRE_ALL:-}" ] && [ "$TETRAPROBE_REQUIRE_ALL" != 0 ]; then
+    echo "fuzz: FAILED: $why; TETRAPROBE_REQUIRE_ALL is set, so the fuzzers may not be skipped" >&2
+    exit 1
+  fi
+  echo "fuzz: skipped: $why"
   exit 0
 fi
 

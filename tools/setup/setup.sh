@@ -8,6 +8,8 @@ PACKAGES=(
   # build side (GPL / AGPL / Apache): only tetra/, bake/, scene/, eval/ and the CLI link these
   libcgal-dev libgmp-dev libmpfr-dev libtet1.5-dev libembree-dev libtbb-dev
   libtinygltf-dev libtinyobjloader-dev libstb-dev libtinyexr-dev nlohmann-json3-dev
+  # eval --plot (tools/cli only; LGPL / MPL): cairo draws the chart to SVG and PNG, text in DejaVu Sans
+  libcairo2-dev fonts-dejavu-core
   # engine side and rendering (permissive)
   libglm-dev libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
   # tests and benchmarks
