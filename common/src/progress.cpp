@@ -13,7 +13,6 @@ namespace tetraprobe {
 
 namespace {
 
-constexpr double kDefaultIntervalSeconds = 5.0;
 constexpr double kMaxGraceSeconds = 1.0;
 
 std::chrono::steady_clock::duration toDuration(double seconds) {

@@ -12,7 +12,7 @@
 //    line at the grace period, a heartbeat every interval after that whether or not a unit completed (a
 //    timer thread per Progress), and its end line when it finishes: "done", or "stopped at DONE/TOTAL UNIT
 //    after T s" when it ends while an exception unwinds the stack.
-// The interval is 5 s; TETRAPROBE_PROGRESS_SECONDS=S sets it (e.g. 0.2 in tests). TETRAPROBE_NO_PROGRESS
+// The interval is 5 s; TETRAPROBE_PROGRESS_SECONDS=S sets it (0.05 in tests). TETRAPROBE_NO_PROGRESS
 // (any value) silences both forms. advance() is thread-safe and cheap (one relaxed atomic add; on a terminal a
 // clock read too).
 #pragma once
