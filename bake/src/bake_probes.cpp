@@ -306,6 +306,12 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
   if (skip && skip->size() != probes.size())
     throw std::invalid_argument("bakeProbes: skip mask size differs from the probe count");
   auto skipped = [&](size_t i) { return skip != nullptr && (*skip)[i] != 0; };
+  // Progress counts the probes a pass traces (skipped ones cost nothing and would make the ETA wrong).
+  auto traced = [&](bool ownOnly) {
+    uint64_t n = 0;
+    for (size_t i = 0; i < probes.size(); ++i) n += !skipped(i) && (!ownOnly || own(i));
+    return n;
+  };
   for (size_t i = 0; i < probes.size(); ++i)
     if (!std::isfinite(probes[i].x) || !std::isfinite(probes[i].y) || !std::isfinite(probes[i].z))
       throw InputError("bake: probe " + std::to_string(i) + " has a non-finite position");
@@ -319,11 +325,10 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
   std::vector<double> achieved;
   uint64_t budgetPaths = 0;
   if (!adaptive) {
-    if (options.progress) progress = std::make_unique<Progress>("bake", probes.size(), "probes");
+    if (options.progress) progress = std::make_unique<Progress>("bake", traced(false), "probes");
     parallelFor(probes.size(), options.threads, [&](size_t i) {
       if (skipped(i)) {
         paths[i] = 0;
-        if (progress) progress->advance();
         return;
       }
       if (stats) {
@@ -398,14 +403,15 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
             throw InputError("bake: no round-1 state for probe " + std::to_string(i));
         floor = r.floor;
       } else {
-        if (options.progress) progress = std::make_unique<Progress>("bake (pass 1)", probes.size(), "probes");
+        if (options.progress)
+          progress = std::make_unique<Progress>("bake (pass 1)", traced(role.pass1Only), "probes");
         parallelFor(probes.size(), options.threads, [&](size_t i) {
-          if (!skipped(i) && (!role.pass1Only || own(i)))
-            run(i, [&] {
-              DenormalScope denormals;
-              while (state[i].batches < minBatches)
-                addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
-            });
+          if (skipped(i) || (role.pass1Only && !own(i))) return;
+          run(i, [&] {
+            DenormalScope denormals;
+            while (state[i].batches < minBatches)
+              addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+          });
           if (progress) progress->advance();
         });
         if (progress) progress->finish();
@@ -419,11 +425,10 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         std::fill(achieved.begin(), achieved.end(), -1.0);
       }
       if (options.progress && !role.pass1Only)
-        progress = std::make_unique<Progress>("bake (to target)", probes.size(), "probes");
+        progress = std::make_unique<Progress>("bake (to target)", traced(true), "probes");
       parallelFor(role.pass1Only ? 0 : probes.size(), options.threads, [&](size_t i) {
         if (skipped(i) || !own(i)) {
           paths[i] = 0;
-          if (progress) progress->advance();
           return;
         }
         run(i, [&] {

@@ -77,7 +77,7 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
   bake.content = content;
   bake.threads = 1;
   bake.progress = false;
-  Progress progress("reference", surface.size(), "points");
+  Progress progress("reference", surface.size(), "points", options.progress);
   parallelFor(surface.size(), options.threads, [&](size_t i) {
     report.points[i].surface = surface[i];
     report.points[i].reference =
@@ -91,7 +91,7 @@ EvalReport computeReference(const SceneTracer& tracer, uint32_t content, const E
                             std::max(1, options.samplesPerPoint / 4),
                             splitmix64(options.seed ^ splitmix64(i) ^ 0xd1ec7ull), direct)
             .irradiance;
-    if (options.progress) progress.advance();
+    progress.advance();
   });
   progress.finish();
   summarizeReferences(report);

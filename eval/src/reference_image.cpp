@@ -148,7 +148,8 @@ ReferenceImage renderReferenceImage(const SceneTracer& tracer, const RenderView&
   bake.threads = 1;
   bake.progress = false;
   std::vector<PixelAccumulator> acc(pixels.size());
-  Progress progress("reference image", uint64_t(pixels.size()) * uint64_t(options.samplesPerPixel), "paths");
+  Progress progress("reference image", uint64_t(pixels.size()) * uint64_t(options.samplesPerPixel), "paths",
+                    options.progress);
   int done = 0;
   while (done < options.samplesPerPixel) {
     const int count = std::min(options.samplesPerPass, options.samplesPerPixel - done);
@@ -161,7 +162,7 @@ ReferenceImage renderReferenceImage(const SceneTracer& tracer, const RenderView&
           const ReferenceIrradiance r =
               referenceIrradiance(tracer, g.position[i], g.normal[i], count, seed, bake);
           acc[k].merge(r.samples, r.irradiance, r.stderror);
-          if (options.progress) progress.advance(uint64_t(count));
+          progress.advance(uint64_t(count));
         },
         16);
     done += count;

@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/common/progress.h"
 #include "tetraprobe/common/splitmix.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
@@ -34,11 +35,13 @@ std::vector<RefinePoint> refinePoints(const SceneTracer& tracer, const RefineOpt
   bake.bounces = kUnboundedBounces;
   bake.content = options.content;
   bake.progress = false;
+  Progress progress("refine (oracle)", surface.size(), "points", options.progress);
   parallelFor(surface.size(), options.threads, [&](size_t i) {
     out[i].surface = surface[i];
     out[i].reference =
         referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
                             splitmix64(options.seed ^ splitmix64(i)), bake);
+    progress.advance();
   });
   return out;
 }

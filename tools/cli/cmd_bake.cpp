@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "args.h"
 #include "commands.h"
@@ -11,6 +12,7 @@
 #include "pipeline_options.h"
 #include "shard_part.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/common/progress.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/scene/load.h"
 
@@ -110,7 +112,10 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   }
 
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = loadScene(scenePath);
+  const Scene scene = [&] {
+    const Progress loading("load", 0, "", opt.bake.progress);
+    return loadScene(scenePath);
+  }();
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const auto& w : scene.warnings) std::fprintf(stderr, "tetraprobe bake: warning: %s\n", w.c_str());
   const uint64_t sceneHash = sceneContentHash(scene);
@@ -139,7 +144,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     part.options = canonical;
     part.bake = std::move(shardOut);
     const auto tw = std::chrono::steady_clock::now();
+    std::optional<Progress> writing(std::in_place, "write", 0, "", opt.bake.progress);
     writeShardPart(out, part);
+    writing.reset();
     stats.timings.emplace_back("write",
                                std::chrono::duration<double>(std::chrono::steady_clock::now() - tw).count());
     uint64_t batches = 0;
@@ -159,7 +166,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   }
 
   const auto tw = std::chrono::steady_clock::now();
+  std::optional<Progress> writing(std::in_place, "write", 0, "", opt.bake.progress);
   if (const LevelResult r = saveLevel(out, level); !r) throw std::runtime_error(r.message);
+  writing.reset();
   stats.timings.emplace_back("write",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - tw).count());
   double total = 0.0;

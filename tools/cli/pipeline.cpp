@@ -15,6 +15,7 @@
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/common/progress.h"
 #include "tetraprobe/eval/refine.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/outer_cells.h"
@@ -102,8 +103,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   PipelineOptions options = given;
   if (!(options.spacing > 0.0)) options.spacing = autoSpacing(scene);
   StageTimer timer(stats);
+  // Progress lines for the stages that have none of their own (a log's heartbeat, common/progress.h);
+  // emplace() ends the previous stage first.
+  std::optional<Progress> stage;
+  const bool show = options.bake.progress;
+  stage.emplace("bvh", 0, "", show);
   SceneTracer tracer(scene);
   timer.mark("bvh");
+  stage.emplace("place", 0, "", show);
 
   std::vector<glm::dvec3> probes;
   std::optional<TetMesh> voxelMesh;   // voxel placement tetrahedralizes with its fillers
@@ -145,6 +152,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.pushedProbes = push.pushed;
     stats.mergedProbes = mergeProbes(placed, 0.1);
     timer.mark("place");
+    stage.emplace("tetrahedralize", 0, "", show);
     if (placed.size() < 4) {
       std::ostringstream msg;
       msg << "only " << placed.size()
@@ -210,7 +218,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     kinds.assign(probes.size(), LevelProbeKind::kGrid);
     stats.rejectedProbes = grid.size() - probes.size();
   }
-  if (!voxelMesh) timer.mark("place");
+  if (!voxelMesh) {
+    timer.mark("place");
+    stage.emplace("tetrahedralize", 0, "", show);
+  }
   if (probes.size() < 4) {
     std::ostringstream msg;
     msg << "only " << probes.size() << " probe(s) left after placement (need at least 4 that are not all "
@@ -230,6 +241,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
   }
   timer.mark("tetrahedralize");
+  stage.emplace("cell grid", 0, "", show);
 
   Level level;
   level.content = options.bake.content;
@@ -256,6 +268,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     // Shell probes that fail the inside rule are dilated whatever they see: not traced.
     std::vector<uint8_t> skip(probes.size(), 0);
     if (!shell.empty()) {
+      stage.emplace("shell clearance", 0, "", show);
       std::vector<glm::dvec3> pts;
       for (size_t i : shell) pts.push_back(probes[i]);
       shellClearance = tracerClearance(tracer, options.bake.threads)(
@@ -265,6 +278,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     if ((options.merged || options.shardRound == 2) && options.expectedProbeCount != probes.size())
       throw InputError("the shards placed " + std::to_string(options.expectedProbeCount) +
                        " probes, this placement " + std::to_string(probes.size()));
+    stage.reset();  // the bake has progress of its own
     if (options.shardCount > 0) {
       const std::vector<uint8_t> own = shardOwnership(probes, options.shardIndex, options.shardCount);
       *options.shardOut =
@@ -291,6 +305,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       const glm::vec3 v = level.sh[i].c[0];
       return 0.2126 * double(v.r) + 0.7152 * double(v.g) + 0.0722 * double(v.b);
     };
+    stage.emplace("dilate", 0, "", show);
     std::vector<uint8_t> invalid(probes.size(), 0), isShell(probes.size(), 0);
     for (size_t i : shell) isShell[i] = 1;
     std::vector<double> interior;
@@ -310,8 +325,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   }
   DeringOptions dering = options.dering;
   dering.threads = options.bake.threads;
+  stage.emplace("dering", 0, "", show);
   stats.dering = deringProbes(level.sh, dering);
   timer.mark("dering");
+  stage.reset();  // occlusion has progress of its own
 
   auto occlude = [&] {
     OcclusionOptions occ = options.occlusion;
@@ -335,12 +352,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt, LevelProbeKind kind) {
     probes.insert(probes.end(), added.begin(), added.end());
     kinds.insert(kinds.end(), added.size(), kind);
+    stage.emplace("tetrahedralize", 0, "", show);
     const TetMesh grown =
         options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
     const MeshQuality q = meshQuality(probes, grown);
     stats.minDihedral = q.worstMinDihedralDeg;
     stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
     for (const glm::dvec3& p : added) level.probes.push_back(glm::vec3(p - level.origin));
+    stage.emplace("cell grid", 0, "", show);
     level.tets = buildTetRecords(probes, grown, level.origin);
     level.outerCells = buildOuterCells(level.probes, level.tets);
     level.cellGrid = buildCellGrid(level.probes, level.tets);
@@ -348,6 +367,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
     // The path budget is the whole bake's: added probes get what the earlier passes left.
     bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
+    stage.reset();  // the bake and occlusion have progress of their own
     BakeStats more;
     std::vector<ShRgb> sh = bakeProbes(tracer, added, bake, &more);
     stats.bake.intersectRays += more.intersectRays;
@@ -369,9 +389,13 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       ho.spacing = options.spacing;
       ho.seed = options.bake.seed ^ (0x401e5ull + uint64_t(round));
       ho.onlyUnseen = options.holesOnlyUnseen;
+      stage.emplace(
+          "holes (round " + std::to_string(round + 1) + " of " + std::to_string(options.holeRounds) + ")", 0,
+          "", show);
       const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
       stats.holeRounds.push_back(
           {holes.pointsChecked, holes.holePoints, holes.probes.size(), holes.seenPoints});
+      stage.reset();
       if (holes.probes.empty()) break;
       stats.holeProbes += holes.probes.size();
       addProbes(holes.probes, 0xb01e5ull + uint64_t(round), LevelProbeKind::kHole);
@@ -394,17 +418,21 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ro.content = options.bake.content;
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;
+    ro.progress = show;  // the oracle's references, by point
     std::vector<RefinePoint> select = refinePoints(tracer, ro);
     ro.seed = options.bake.seed ^ 0x7a11dull;
     std::vector<RefinePoint> check = refinePoints(tracer, ro);
+    stage.emplace("refine (select)", 0, "", show);
     stats.refineBefore = scoreRefinePoints(level, check);
     scoreRefinePoints(level, select);
     const std::vector<glm::dvec3> added =
         proposeRefinement(tracer, level, select, size_t(budget), options.spacing, 0.1, options.refineOffset);
     stats.refineProbes = added.size();
     if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement);
+    stage.emplace("refine (check)", 0, "", show);
     stats.refineAfter = scoreRefinePoints(level, check);
     timer.mark("refine");
+    stage.reset();
   }
 
   // What the user gets: the surface points of the finished level (after hole filling and refinement, which
@@ -414,11 +442,13 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ho.spacing = options.spacing;
     ho.seed = options.bake.seed ^ 0xf1a1ull;
     ho.propose = false;
+    stage.emplace("check", 0, "", show);
     const OcclusionHoles left = findOcclusionHoles(tracer, level, ho);
     stats.finalChecked = left.pointsChecked;
     stats.finalHoles = left.holePoints;
     stats.finalLookupFallbacks = left.lookupFallbackPoints;
     timer.mark("check");
+    stage.reset();
   }
 
   // The SH as the level file and the GPU hold them (half precision, runtime/sh_half.h), so that what the caller

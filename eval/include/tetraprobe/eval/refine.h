@@ -26,6 +26,7 @@ struct RefineOptions {
   uint32_t content = kContentDefault;  // the level's light content
   uint64_t seed = 0x2ef1eull;
   int threads = 0;
+  bool progress = false;  // progress over the points' references (common/progress.h)
 };
 
 // One surface point and what it measured.
