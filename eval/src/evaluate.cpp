@@ -19,9 +19,9 @@
 #include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
-#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/shade.h"
 
 namespace tetraprobe {
 
@@ -389,12 +389,7 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
   const Level* lv = &level;
   return {"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
           [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
-            const Location loc = query->locate(p);
-            if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
-            const glm::vec3 local(p - lv->origin);
-            const glm::vec4 vis = lookupVisibility(
-                *lv, *occlusion, loc, occlusionVisibility(*lv, *occlusion, loc.tet, local, n), local, n);
-            return occludedIrradianceAt(*lv, loc.tet, loc.weights, vis, local, n);
+            return shadeLocated(*lv, occlusion.get(), query->locate(p), p, n);
           }};
 }
 
