@@ -48,16 +48,16 @@ glm::vec3 shadeLocated(const Level& level, const LevelOcclusion* occlusion, cons
   }
   if (loc.tet < 0) return glm::vec3(0.0f);
   const Tet& t = level.tets[size_t(loc.tet)];
-  const glm::vec3 local(world - level.origin);
   if (occlusion == nullptr) {
     const glm::vec3 answer = blendIrradiance(level.sh, t, loc.weights, normal);
     if (record) {
       record->weights = loc.weights;
-      describeFallback(level, t, loc, local, normal, *record);
+      describeFallback(level, t, loc, glm::vec3(world - level.origin), normal, *record);
       record->answer = answer;
     }
     return answer;
   }
+  const glm::vec3 local(world - level.origin);
   // Outside the hull the outer cell's weights sit on its hull tet's probes; that tet's occlusion still tells
   // which of them the point can see (a wall cutting the tet usually extends past the hull), so it applies too.
   glm::vec4 own;
