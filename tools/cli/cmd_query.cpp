@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shade.h"
 #include "tetraprobe/scene/load.h"
@@ -108,7 +109,7 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   }
   const glm::vec3 answer = record.answer;
   std::printf("  answer %.4g, %.4g, %.4g W/m^2 (luminance %.4g)\n", answer.r, answer.g, answer.b,
-              0.2126 * answer.r + 0.7152 * answer.g + 0.0722 * answer.b);
+              luminance(glm::dvec3(answer)));
 }
 
 }  // namespace
