@@ -128,7 +128,7 @@ void axisLuminance(const double sh[kShCoeffCount][3], double out[6]) {
     double e[3] = {0, 0, 0};
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) e[c] += shCosineLobe(i) * sh[i][c] * y[size_t(i)];
-    out[k] = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+    out[k] = luminance(glm::dvec3(e[0], e[1], e[2]));
   }
 }
 

@@ -15,15 +15,14 @@
 #include <glm/vec3.hpp>
 
 #include "rng.h"
+#include "tetraprobe/runtime/luminance.h"
 
 namespace tetraprobe::bake_detail {
 
 inline constexpr float kPi = std::numbers::pi_v<float>;
 inline constexpr float kInvPi = std::numbers::inv_pi_v<float>;
 
-inline float luminance(const glm::vec3& c) {
-  return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
-}
+using ::tetraprobe::luminance;  // Rec. 709, runtime/luminance.h
 inline float maxComponent(const glm::vec3& c) {
   return std::fmax(c.x, std::fmax(c.y, c.z));
 }

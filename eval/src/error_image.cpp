@@ -9,12 +9,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "tetraprobe/runtime/luminance.h"
+
 namespace tetraprobe {
 
 namespace {
 
-float luminance(const glm::vec3& c) {
-  const float y = 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+// Rec. 709 luminance, non-finite as 0 and negative clamped to 0.
+float clampedLuminance(const glm::vec3& c) {
+  const float y = luminance(c);
   return std::isfinite(y) ? std::max(y, 0.0f) : 0.0f;
 }
 
@@ -32,8 +35,8 @@ float srgbDecode(float v) {
 }  // namespace
 
 float signedLog2Error(const glm::vec3& lookup, const glm::vec3& reference) {
-  const double x = std::max(double(luminance(lookup)), kErrorFloor);
-  const double r = std::max(double(luminance(reference)), kErrorFloor);
+  const double x = std::max(double(clampedLuminance(lookup)), kErrorFloor);
+  const double r = std::max(double(clampedLuminance(reference)), kErrorFloor);
   return float(std::log2(x / r));
 }
 

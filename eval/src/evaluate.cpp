@@ -19,19 +19,16 @@
 #include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
-#include "tetraprobe/runtime/face_blend.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/shade.h"
 
 namespace tetraprobe {
 
 namespace {
 
 constexpr double kFloor = 0.01;  // W/m^2, see evaluate.h
-
-double luminance(const glm::vec3& c) {
-  return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-}
 
 // The report's header and its points' surfaces, drawn as options.sampling says (both reference paths draw
 // the same points for the same options).
@@ -54,10 +51,10 @@ EvalReport drawPoints(const SceneTracer& tracer, const EvalOptions& options,
 void summarizeReferences(EvalReport& report) {
   double sum = 0.0;
   for (auto& p : report.points) {
-    p.indirectOnly = luminance(p.direct) < kIndirectOnlyFraction * luminance(p.reference.irradiance);
+    const double y = luminance(glm::dvec3(p.reference.irradiance));
+    p.indirectOnly = luminance(glm::dvec3(p.direct)) < kIndirectOnlyFraction * y;
     report.indirectOnlyPoints += p.indirectOnly ? 1 : 0;
-    sum += luminance(p.reference.stderror) /
-           std::sqrt(luminance(p.reference.irradiance) * luminance(p.reference.irradiance) + kFloor);
+    sum += luminance(glm::dvec3(p.reference.stderror)) / std::sqrt(y * y + kFloor);
   }
   report.meanRelStderr = report.points.empty() ? 0.0 : sum / double(report.points.size());
 }
@@ -149,10 +146,11 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
       e += std::abs(d) / std::sqrt(double(r[c]) * r[c] + kFloor);
     }
     rel[i] = e / 3.0;
-    const double lx = std::max(luminance(x), kFloor), lr = std::max(luminance(r), kFloor);
+    const double yx = luminance(glm::dvec3(x)), yr = luminance(glm::dvec3(r));
+    const double lx = std::max(yx, kFloor), lr = std::max(yr, kFloor);
     gross += (lx > 2.0 * lr || lx < 0.5 * lr) ? 1 : 0;
     dark += lx < 0.25 * lr ? 1 : 0;
-    const double l = std::max(0.0, luminance(x) - luminance(r)) / std::max(luminance(r), kFloor);
+    const double l = std::max(0.0, yx - yr) / lr;
     leak += l;
     if (report.points[i].indirectOnly) {
       leakIndirect += l;
@@ -389,12 +387,7 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
   const Level* lv = &level;
   return {"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
           [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
-            const Location loc = query->locate(p);
-            if (loc.tet < 0 || size_t(loc.tet) >= lv->tets.size()) return query->irradiance(p, n);
-            const glm::vec3 local(p - lv->origin);
-            const glm::vec4 vis = lookupVisibility(
-                *lv, *occlusion, loc, occlusionVisibility(*lv, *occlusion, loc.tet, local, n), local, n);
-            return occludedIrradianceAt(*lv, loc.tet, loc.weights, vis, local, n);
+            return shadeLocated(*lv, occlusion.get(), query->locate(p), p, n);
           }};
 }
 

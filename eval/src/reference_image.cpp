@@ -18,16 +18,13 @@
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/common/splitmix.h"
+#include "tetraprobe/runtime/luminance.h"
 
 namespace tetraprobe {
 
 namespace {
 
 constexpr double kFloor = 0.01;  // W/m^2, the evaluation's floor (evaluate.h)
-
-double luminance(const glm::dvec3& c) {
-  return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-}
 
 void checkViewSize(const RenderView& view) {
   if (view.width < 1 || view.height < 1 || view.width > 16384 || view.height > 16384)

@@ -14,6 +14,7 @@
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/common/splitmix.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
@@ -21,10 +22,6 @@ namespace tetraprobe {
 namespace {
 
 constexpr double kFloor = 0.01;  // W/m^2, as eval
-
-double luminance(const glm::vec3& c) {
-  return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-}
 
 }  // namespace
 
@@ -55,8 +52,8 @@ ErrorEstimate scoreRefinePoints(const Level& level, std::vector<RefinePoint>& po
   size_t gross = 0;
   for (RefinePoint& p : points) {
     const glm::vec3 x = query.irradiance(p.surface.position, p.surface.normal);
-    const double lx = luminance(x), lr = luminance(p.reference.irradiance);
-    const double noise = 3.0 * luminance(p.reference.stderror);
+    const double lx = luminance(glm::dvec3(x)), lr = luminance(glm::dvec3(p.reference.irradiance));
+    const double noise = 3.0 * luminance(glm::dvec3(p.reference.stderror));
     p.error =
         std::abs(lx - lr) <= noise ? 0.0 : std::abs(std::log2(std::max(lx, kFloor) / std::max(lr, kFloor)));
     sum += p.error;

@@ -18,10 +18,8 @@
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
-#include "tetraprobe/runtime/face_blend.h"
-#include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/runtime/query.h"
-#include "tetraprobe/runtime/sh.h"
+#include "tetraprobe/runtime/shade.h"
 
 namespace tetraprobe {
 
@@ -107,49 +105,23 @@ bool ProbesInFront::propose(const glm::dvec3& point, const glm::vec3& normal) {
 
 namespace {
 
-// The fallback's share at a point already located, by the tet's own data (occlusionFallbackShare) and, with
-// `lookup`, by the visibility the run-time lookup uses after the face blend.
-float fallbackShareAt(const Level& level, const Location& loc, const glm::dvec3& point,
-                      const glm::vec3& normal, float* lookup = nullptr) {
-  if (lookup) *lookup = 0.0f;
-  if (level.occlusion.empty() || loc.tet < 0) return 0.0f;
-  float fallback = 0.0f;
-  const glm::vec3 local(point - level.origin);
-  const glm::vec4 own = occlusionVisibility(level, level.occlusion, loc.tet, local, normal);
-  applyOcclusion(loc.weights, own, &fallback);
-  if (lookup)
-    applyOcclusion(loc.weights, lookupVisibility(level, level.occlusion, loc, own, local, normal), lookup);
-  return fallback;
-}
-
-// Whether the fallback at the point answers with the light of a probe the point sees: the probe it leans on
-// (the largest of u_i max(front_i, kOcclusionBehindShare), as occludedIrradiance weighs them) lies in front,
-// a ray reaches it, and the unoccluded blend capping the fallback is not darker in any channel.
-bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const Location& loc,
+// Whether the fallback at a point (its shading record, ProbeQuery::explain) answers with the light of a probe
+// the point sees: the probe it leans on (record.fallbackProbe, as occludedIrradiance weighs them) lies in
+// front, a ray reaches it, and the unoccluded blend capping the fallback is not darker in any channel.
+bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const ShadeRecord& record,
                        const glm::dvec3& point, const glm::vec3& normal) {
+  const Location& loc = record.location;
   if (loc.tet < 0) return false;
-  const Tet& t = level.tets[size_t(loc.tet)];
-  const glm::vec3 local(point - level.origin);
-  glm::vec3 toProbe[4];
-  for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
-  const glm::vec4 front = probeFront(toProbe, normal);
-  const glm::vec4 u = applyOcclusion(loc.weights, glm::vec4(1.0f));
-  const glm::vec4 lean = fallbackLean(u, front);
-  int best = 0;
-  for (int i = 1; i < 4; ++i)
-    if (lean[i] > lean[best]) best = i;
-  if (!(front[best] > 0.5f)) return false;
+  const int best = record.fallbackProbe;
+  if (!(record.front[best] > 0.5f)) return false;
   // The fallback is min(that probe, the unoccluded blend) per channel: where the blend (which may hold probes
   // behind a wall) is the darker, the answer is not the seen probe's light.
-  const glm::vec3 own = shIrradiance(level.sh[size_t(t.v[best])], normal);
-  const ShRgb* sh[4];
-  for (int i = 0; i < 4; ++i) sh[i] = &level.sh[size_t(t.v[i])];
-  const float uf[4] = {u.x, u.y, u.z, u.w};
-  const glm::vec3 blend = shIrradiance(shBlend(sh, uf, 4), normal);
+  const glm::vec3 own = record.probeIrradiance[best], blend = record.unoccludedIrradiance;
   if (!(own.x <= blend.x && own.y <= blend.y && own.z <= blend.z)) return false;
+  const int32_t probe = level.tets[size_t(loc.tet)].v[best];
   const glm::vec3 n = glm::normalize(normal);
   const glm::vec3 origin = glm::vec3(point) + n * tracer.rayEpsilon();
-  const glm::vec3 d = glm::vec3(glm::dvec3(level.probes[size_t(t.v[best])]) + level.origin) - origin;
+  const glm::vec3 d = glm::vec3(glm::dvec3(level.probes[size_t(probe)]) + level.origin) - origin;
   const float dist = glm::length(d);
   return dist > 0.0f && !tracer.occluded(origin, d / dist, 0.0f, dist, kOcclusionWallTransmission);
 }
@@ -159,7 +131,9 @@ bool fallbackProbeSeen(const SceneTracer& tracer, const Level& level, const Loca
 float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
                              const glm::vec3& normal) {
   if (level.occlusion.empty()) return 0.0f;
-  return fallbackShareAt(level, query.locate(point), point, normal);
+  ShadeRecord record;
+  query.explain(point, normal, record);
+  return record.ownFallback;
 }
 
 OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
@@ -178,14 +152,14 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   std::optional<ProbesInFront> proposals;
   if (options.propose) proposals.emplace(tracer, level, options.spacing);
   FlushDenormalsScope ftz;
+  ShadeRecord record;
   for (const SurfacePoint& sp : points) {
-    const Location loc = query.locate(sp.position);
-    float lookupFallback = 0.0f;
-    const float fallback = fallbackShareAt(level, loc, sp.position, sp.normal, &lookupFallback);
-    out.lookupFallbackPoints += lookupFallback > 0.0f;
-    if (!(fallback > 0.0f)) continue;
+    // The tet's own data decides a hole; the lookup's answer (after the face blend) is counted apart.
+    query.explain(sp.position, sp.normal, record);
+    out.lookupFallbackPoints += record.fallback > 0.0f;
+    if (!(record.ownFallback > 0.0f)) continue;
     ++out.holePoints;
-    if (options.onlyUnseen && fallbackProbeSeen(tracer, level, loc, sp.position, sp.normal)) {
+    if (options.onlyUnseen && fallbackProbeSeen(tracer, level, record, sp.position, sp.normal)) {
       ++out.seenPoints;
       continue;
     }

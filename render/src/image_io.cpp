@@ -9,6 +9,7 @@
 
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/file_io.h"
+#include "tetraprobe/runtime/luminance.h"
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_STATIC
@@ -68,7 +69,7 @@ float autoExposure(const Image& image) {
   for (size_t i = 0; i < n; ++i) {
     const float* p = &image.rgba[4 * i];
     if (!(p[3] > 0.0f)) continue;
-    const float y = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+    const float y = luminance(glm::vec3(p[0], p[1], p[2]));
     if (std::isfinite(y)) lum.push_back(y);
   }
   if (lum.empty()) return 1.0f;

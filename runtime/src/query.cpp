@@ -15,11 +15,10 @@
 // path-independent.
 #include "tetraprobe/runtime/query.h"
 
-#include "tetraprobe/runtime/face_blend.h"
+#include "blend_irradiance.h"
 #include "tetraprobe/runtime/lookup_constants.h"
-#include "tetraprobe/runtime/occlusion.h"
-
 #include "tetraprobe/runtime/outer_cells.h"
+#include "tetraprobe/runtime/shade.h"
 
 #include <algorithm>
 #include <cassert>
@@ -34,6 +33,8 @@
 
 namespace tetraprobe {
 namespace {
+
+using runtime_detail::blendIrradiance;
 
 constexpr int kMaxWalkSteps = 4096;
 constexpr int kMaxHintSteps = kLookupMaxHintSteps;  // lookup_constants.h (the GLSL mirrors them)
@@ -312,64 +313,6 @@ inline int32_t plainStep(const std::vector<Tet>& tets, const std::vector<glm::ve
   return t.n[m];
 }
 
-#if defined(__GNUC__) && defined(__has_builtin)
-#if __has_builtin(__builtin_shufflevector)
-#define TETRAPROBE_FLOAT4 1
-#endif
-#endif
-
-#ifdef TETRAPROBE_FLOAT4
-typedef float Float4 __attribute__((vector_size(16)));  // GCC/Clang vector extension: one SSE/NEON register
-
-inline Float4 load4(const float* p) {
-  Float4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-#endif
-
-// shIrradiance(shBlend(the tet's 4 probes, weights), normal), inlined: the same float operations in the same
-// order (so the same bits). With GCC/Clang vectors: the 27-float blend b as 7 vectors of 4 (the last starting
-// at float 23, overlapping the sixth: no read past a record), then the 9 irradiance terms with the three
-// channels in the lanes of one vector (b[3i..3i+2] shuffled out of the registers, not stored and reloaded),
-// each lane summing its terms in shIrradiance's order.
-inline glm::vec3 blendIrradiance(const std::vector<ShRgb>& sh, const Tet& t, const glm::vec4& weights,
-                                 const glm::vec3& normal) {
-  static_assert(sizeof(ShRgb) == 27 * sizeof(float));
-  const float* p[4];
-  for (int i = 0; i < 4; ++i) p[i] = reinterpret_cast<const float*>(&sh[size_t(t.v[i])]);
-  const float w0 = weights[0], w1 = weights[1], w2 = weights[2], w3 = weights[3];
-  const auto y = shBasis<float>(normal.x, normal.y, normal.z);
-  float f[kShCoeffCount];
-  for (int i = 0; i < kShCoeffCount; ++i) f[i] = y[size_t(i)] * float(shCosineLobe(i));
-#ifdef TETRAPROBE_FLOAT4
-  const auto blend = [&](int j) {
-    return ((load4(p[0] + j) * w0 + load4(p[1] + j) * w1) + load4(p[2] + j) * w2) + load4(p[3] + j) * w3;
-  };
-  const Float4 b0 = blend(0), b4 = blend(4), b8 = blend(8), b12 = blend(12), b16 = blend(16), b20 = blend(20),
-               b23 = blend(23);
-  // Lane c of term i is b[3i + c] (lane 3 unused).
-  const Float4 term[kShCoeffCount] = {b0,
-                                      __builtin_shufflevector(b0, b4, 3, 4, 5, 6),
-                                      __builtin_shufflevector(b4, b8, 2, 3, 4, 5),
-                                      __builtin_shufflevector(b8, b12, 1, 2, 3, 4),
-                                      b12,
-                                      __builtin_shufflevector(b12, b16, 3, 4, 5, 6),
-                                      __builtin_shufflevector(b16, b20, 2, 3, 4, 5),
-                                      __builtin_shufflevector(b20, b23, 1, 2, 4, 5),
-                                      __builtin_shufflevector(b23, b23, 1, 2, 3, 3)};
-  Float4 e = {0.0f, 0.0f, 0.0f, 0.0f};
-  for (int i = 0; i < kShCoeffCount; ++i) e += term[i] * f[i];
-  return glm::vec3(e[0], e[1], e[2]);
-#else
-  float b[27];
-  for (int j = 0; j < 27; ++j) b[j] = ((p[0][j] * w0 + p[1][j] * w1) + p[2][j] * w2) + p[3][j] * w3;
-  glm::vec3 e(0.0f);
-  for (int i = 0; i < kShCoeffCount; ++i) e += glm::vec3(b[3 * i], b[3 * i + 1], b[3 * i + 2]) * f[i];
-  return e;
-#endif
-}
-
 inline void prefetchTet(const std::vector<Tet>& tets, int32_t t) {
   const char* p = reinterpret_cast<const char*>(tets.data() + t);
   __builtin_prefetch(p);
@@ -639,42 +582,11 @@ Location ProbeQuery::walkLocate(const glm::dvec3& world) const {
 glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache) const {
   const Location loc = locate(world, tetCache ? *tetCache : -1);
   if (tetCache) *tetCache = loc.tet;
-  return shade(loc, world, normal);
+  return shadeLocated(level_, occlusion(), loc, world, normal);
 }
 
-glm::vec3 ProbeQuery::shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal,
-                            int32_t* frameTet, BaryFrame* frame) const {
-  if (loc.tet < 0) return glm::vec3(0.0f);
-  const Tet& t = level_.tets[size_t(loc.tet)];
-  glm::vec4 weights = loc.weights;
-  // Outside the hull the outer cell's weights sit on its hull tet's probes; that tet's occlusion still tells
-  // which of them the point can see (a wall cutting the tet usually extends past the hull), so it applies
-  // too.
-  // A point that sees none of its probes blends into its fallback (occludedIrradiance).
-  if (usesOcclusion()) {
-    const glm::vec3 local(world - level_.origin);
-    glm::vec4 vis;
-    if (frameTet == nullptr) {
-      vis = occlusionVisibility(level_, level_.occlusion, loc.tet, local, normal);
-    } else {
-      // The frame of a tet with occlusion data, kept while the queries stay in it (the same frame
-      // occlusionVisibility would compute, so the same bits).
-      if (*frameTet != loc.tet && level_.occlusion.tets[size_t(loc.tet)].kind() != kOcclusionNone) {
-        *frame = baryFrame(t, level_.probes);
-        *frameTet = loc.tet;
-      }
-      vis = *frameTet == loc.tet
-                ? occlusionVisibility(level_, level_.occlusion, loc.tet, *frame, local, normal)
-                : glm::vec4(1.0f);  // a tet storing nothing: every probe visible
-    }
-    // Near a face, blended with the neighbour's visibility of the face's probes, so that the two tets' data
-    // leave no seam (face_blend.h); not outside the hull, where the outer cell's weights are not the tet's.
-    vis = lookupVisibility(level_, level_.occlusion, loc, vis, local, normal);
-    float fallback = 0.0f;
-    weights = applyOcclusion(weights, vis, &fallback);
-    if (fallback > 0.0f) return occludedIrradianceAt(level_, loc.tet, loc.weights, vis, local, normal);
-  }
-  return blendIrradiance(level_.sh, t, weights, normal);
+glm::vec3 ProbeQuery::explain(const glm::dvec3& world, const glm::vec3& normal, ShadeRecord& record) const {
+  return shadeLocated(level_, occlusion(), locate(world), world, normal, &record);
 }
 
 // Random queries on a large level are bound by memory latency: the hash slot, a dozen or more BSP nodes, the
@@ -699,9 +611,8 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
   size_t slot[kBatchGroup];
   bool haveKey[kBatchGroup], done[kBatchGroup];
   Location loc[kBatchGroup];
-  PreparedTet hint;       // the previous query's tet
-  int32_t frameTet = -1;  // the last occluded tet whose BaryFrame `occFrame` holds (shade())
-  BaryFrame occFrame;
+  PreparedTet hint;            // the previous query's tet
+  ShadeFrameCache frameCache;  // the last occluded tet's BaryFrame (shadeLocated)
   // Queries since the hint last answered one: while small (coherent order) a query the hint misses is
   // located at once, so the next one has its tet as hint (deferring it to the group's pipeline would leave
   // the rest of the group a stale hint, a few tets behind).
@@ -813,8 +724,9 @@ void ProbeQuery::batchRange(const glm::dvec3* world, const glm::vec3* normal, gl
     }
     if (usesOcclusion()) {
       for (size_t k = 0; k < n; ++k)
-        out[g + k] = shade(loc[k], world[g + k], normal[g + k], &frameTet, &occFrame);
-    } else {  // shade() without occlusion, inlined (every located query has a tet)
+        out[g + k] = shadeLocated(level_, &level_.occlusion, loc[k], world[g + k], normal[g + k], nullptr,
+                                  &frameCache);
+    } else {  // shadeLocated() without occlusion, inlined (every located query has a tet)
       for (size_t k = 0; k < n; ++k)
         out[g + k] = blendIrradiance(level_.sh, tets[size_t(loc[k].tet)], loc[k].weights, normal[g + k]);
     }

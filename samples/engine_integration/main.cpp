@@ -20,18 +20,17 @@
 #include <vector>
 
 #include <tetraprobe/runtime/level.h>
+#include <tetraprobe/runtime/luminance.h>
 #include <tetraprobe/runtime/query.h>
 
 #include "gpu_level.h"
 
 namespace {
 
+using tetraprobe::luminance;  // Rec. 709
+
 bool parseVec(const char* s, glm::dvec3& v) {
   return std::sscanf(s, "%lf,%lf,%lf", &v.x, &v.y, &v.z) == 3;
-}
-
-float luminance(const glm::vec3& e) {
-  return 0.2126f * e.r + 0.7152f * e.g + 0.0722f * e.b;
 }
 
 }  // namespace

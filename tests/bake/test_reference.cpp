@@ -9,6 +9,7 @@
 #include "test_scenes.h"
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/luminance.h"
 
 namespace tetraprobe {
 namespace {
@@ -289,7 +290,7 @@ TEST(Reference, ToErrorStopsAtTheTargetAndEqualsFixedCount) {
   const BakeOptions o = opts(2, kContentDefault);
   const glm::dvec3 p(0.9, 0.0, 0.3);
   const glm::vec3 n(0, 1, 0);
-  const auto lum = [](const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; };
+  const auto lum = [](const glm::vec3& c) { return luminance(glm::dvec3(c)); };
   for (double target : {0.05, 0.01}) {
     const ReferenceIrradiance r = referenceIrradianceToError(tracer, p, n, target, 1 << 20, 17, o);
     EXPECT_GE(r.samples, 64);

@@ -23,6 +23,7 @@
 #include "level_bytes.h"
 #include "missing_capability.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/streaming.h"
 
@@ -824,7 +825,7 @@ TEST_F(Cli, PointSeeingNoneOfItsProbesGetsLightFromItsOwnSide) {
   auto lum = [](const std::string& line) {
     double r = 0, g = 0, b = 0;
     std::sscanf(line.c_str(), "%lf,%lf,%lf", &r, &g, &b);
-    return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    return tetraprobe::luminance(glm::dvec3(r, g, b));
   };
   const CliRun ref = run("reference " + path("wall.obj").string() + " --points " +
                          path("point.csv").string() + " --rel-error 0.02");

@@ -4,11 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include "test_levels.h"
 #include "tetraprobe/eval/evaluate.h"
+#include "tetraprobe/occlusion/build_occlusion.h"
+#include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/query.h"
 
 namespace tetraprobe {
@@ -199,6 +203,52 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 80);
   EXPECT_GT(section("outer_cells"), 0u);
   EXPECT_EQ(section("start_grid"), query.startGrid().startTet.size() * 4);
+}
+
+// `tet+occlusion` (occlusionMethod, for a level without stored occlusion) answers what the `tet` lookup
+// answers once the level stores that occlusion, bit for bit: one shading (runtime/shade.h). Checked over a room
+// with a closet between the probes (points on its inner walls see none of their probes: the fallback) at
+// surface points and at volume points inside and outside the probes' hull.
+TEST(OcclusionMethod, IsTheTetLookupWithTheLevelStoringTheData) {
+  Scene s;
+  const uint32_t grey = test::addMaterial(s, glm::vec3(0.5f));
+  test::addBox(s, {-2, 0, -2}, {2, 2.5f, 2}, /*inward=*/true, grey);
+  test::addBox(s, {-0.25f, 0.4f, -0.25f}, {0.25f, 1.1f, 0.25f}, /*inward=*/false, grey);
+  test::addBox(s, {-0.24f, 0.41f, -0.24f}, {0.24f, 1.09f, 0.24f}, /*inward=*/true, grey);
+  const SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes;
+  for (double z : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7})
+    for (double y : {0.3, 1.2, 2.2})
+      for (double x : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7}) probes.push_back({x, y, z});
+  Level plain = test::bakedLevel(tracer, probes, 1);
+  std::mt19937_64 rng(7);  // the room is unlit: random light, so that every probe's weight shows
+  std::uniform_real_distribution<float> u(-0.3f, 0.3f);
+  for (ShRgb& sh : plain.sh) {
+    for (glm::vec3& c : sh.c) c = glm::vec3(u(rng), u(rng), u(rng));
+    sh.c[0] += glm::vec3(1.0f, 0.8f, 0.6f);
+  }
+  OcclusionOptions o;
+  o.progress = false;
+  auto occlusion = std::make_shared<const LevelOcclusion>(buildOcclusion(tracer, plain, o));
+  ASSERT_FALSE(occlusion->empty());
+  Level stored = plain;
+  stored.occlusion = *occlusion;
+  const LookupMethod method = occlusionMethod(plain, occlusion);
+  const ProbeQuery query(stored);
+  std::vector<SurfacePoint> points = sampleSurfacePoints(tracer, 2000, 3);
+  for (int i = 0; i < 300; ++i) {
+    SurfacePoint p;
+    p.position = glm::dvec3(-2.4 + 0.016 * i, 0.1 + 0.007 * i, 2.4 - 0.016 * i);  // corner to corner
+    points.push_back(p);
+  }
+  size_t fallback = 0;
+  for (const SurfacePoint& p : points) {
+    const glm::vec3 a = method.lookup(p.position, p.normal), b = query.irradiance(p.position, p.normal);
+    ASSERT_TRUE(a == b) << "(" << p.position.x << ", " << p.position.y << ", " << p.position.z << "): " << a.x
+                        << " vs " << b.x;
+    fallback += occlusionFallbackShare(stored, query, p.position, p.normal) > 0.0f;
+  }
+  EXPECT_GT(fallback, 0u);  // the fallback is among the cases
 }
 
 // The shuffled timing order is a permutation of the coherent one (the same work, another order).

@@ -26,6 +26,7 @@
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/render/render.h"
 #include "tetraprobe/runtime/file_io.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/occlusion.h"
 #include "tetraprobe/scene/load.h"
 
@@ -72,10 +73,6 @@ std::map<std::string, std::vector<StoredReference>> readStoredReferences(const s
     sets[set].push_back(r);
   }
   return sets;
-}
-
-double luminanceOf(const glm::vec3& c) {
-  return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
 }
 
 // A method with what it takes to render it on the GPU (empty: no shader for it).
@@ -542,8 +539,8 @@ int cmdEval(int argc, char** argv) {
       for (size_t i = 0; i < share.size(); ++i) {
         if (!(share[i] > 0.0f)) continue;
         ++fallback;
-        const double lx = std::max(luminanceOf(tet.values[i]), 0.01),
-                     lr = std::max(luminanceOf(report.points[i].reference.irradiance), 0.01);
+        const double lx = std::max(luminance(glm::dvec3(tet.values[i])), 0.01),
+                     lr = std::max(luminance(glm::dvec3(report.points[i].reference.irradiance)), 0.01);
         gross += (lx > 2 * lr || lx < 0.5 * lr) ? 1 : 0;
         dark += lx < 0.25 * lr ? 1 : 0;
       }

@@ -12,10 +12,9 @@
 #include "commands.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
-#include "tetraprobe/runtime/face_blend.h"
-#include "tetraprobe/runtime/occlusion.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
-#include "tetraprobe/runtime/sh.h"
+#include "tetraprobe/runtime/shade.h"
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
@@ -41,15 +40,18 @@ const char* occlusionKindText(const Level& level, int32_t tet) {
   }
 }
 
-// What the answer is made of, in the runtime's own terms (ProbeQuery::shade): the tet, its probes, the
-// occlusion data's visibility and the fallback share. Printed after the r,g,b line so scripts can read line 1.
-// With a tracer, also what rays from the point (moved off the surface along n by the tracer's epsilon) to each
-// probe say (where the data and the rays disagree, the occlusion data is the culprit), and which side of the
-// first surface along n the point faces (from behind: it may lie inside solid geometry).
-void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n, const glm::vec3& answer,
+// What the answer is made of, in the runtime's own terms (ShadeRecord, from ProbeQuery::explain): the tet,
+// its probes, the occlusion data's visibility and the fallback share. Printed after the r,g,b line so scripts
+// can read line 1. With a tracer, also what rays from the point (moved off the surface along n by the
+// tracer's epsilon) to each probe say (where the data and the rays disagree, the occlusion data is the
+// culprit), and which side of the first surface along n the point faces (from behind: it may lie inside solid
+// geometry).
+void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& n,
              const SceneTracer* tracer) {
   const Level& level = query.level();
-  const Location loc = query.locate(world);
+  ShadeRecord record;
+  query.explain(world, n, record);
+  const Location& loc = record.location;
   if (loc.tet < 0) {
     std::printf("explain: the level has no tets\n");
     return;
@@ -61,18 +63,14 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   else
     std::printf("explain: inside tet %d\n", loc.tet);
   std::printf("  occlusion: %s\n", occlusionKindText(level, loc.tet));
-  const glm::vec3 local(world - level.origin);
   // What the answer uses: the tet's data blended near faces with its neighbours' (face_blend.h).
-  const glm::vec4 own = query.usesOcclusion() ? occlusionVisibility(level, level.occlusion, loc.tet, local, n)
-                                              : glm::vec4(1.0f);
-  const glm::vec4 vis = lookupVisibility(level, level.occlusion, loc, own, local, n);
+  const glm::vec4 own = record.ownVisibility, vis = record.visibility;
   if (vis != own)
     std::printf(
         "  face blend: near a face the visibility below is blended with the neighbour's (the tet's data "
         "alone: %.3f %.3f %.3f %.3f)\n",
         own.x, own.y, own.z, own.w);
-  float fallback = 0.0f;
-  const glm::vec4 occluded = applyOcclusion(loc.weights, vis, &fallback);
+  const float fallback = record.fallback;
   // The rays column only with a tracer, so the rows read the same as before without one.
   std::printf("  %-8s %-36s %9s %8s %10s %9s %s%s\n", "probe", "position (world, m)", "distance", "weight",
               "visibility", "after occ", tracer ? " rays " : "", " E(n) r,g,b W/m^2");
@@ -81,7 +79,7 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   for (int i = 0; i < 4; ++i) {
     const int32_t p = t.v[i];
     const glm::dvec3 pw = level.origin + glm::dvec3(level.probes[size_t(p)]);
-    const glm::vec3 ep = shIrradiance(level.sh[size_t(p)], n);
+    const glm::vec3 ep = record.probeIrradiance[i];
     char pos[64];
     std::snprintf(pos, sizeof pos, "%.3f, %.3f, %.3f", pw.x, pw.y, pw.z);
     const char* rays = "";
@@ -93,7 +91,7 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
                                                                                 : " clear";
     }
     std::printf("  %-8d %-36s %9.3f %8.4f %10.3f %9.4f%s  %.4g, %.4g, %.4g\n", p, pos,
-                glm::length(pw - world), loc.weights[i], vis[i], occluded[i], rays, ep.r, ep.g, ep.b);
+                glm::length(pw - world), loc.weights[i], vis[i], record.weights[i], rays, ep.r, ep.g, ep.b);
   }
   if (fallback > 0.0f)
     std::printf(
@@ -109,8 +107,9 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
                   h.frontFace ? "front (the point is in open space)"
                               : "back (the point may be inside solid geometry)");
   }
+  const glm::vec3 answer = record.answer;
   std::printf("  answer %.4g, %.4g, %.4g W/m^2 (luminance %.4g)\n", answer.r, answer.g, answer.b,
-              0.2126 * answer.r + 0.7152 * answer.g + 0.0722 * answer.b);
+              luminance(glm::dvec3(answer)));
 }
 
 }  // namespace
@@ -188,7 +187,7 @@ int cmdQuery(int argc, char** argv) {
       scene = std::make_unique<Scene>(loadScene(args.str("--scene")));
       tracer = std::make_unique<SceneTracer>(*scene);
     }
-    explain(query, world, n, e, tracer.get());
+    explain(query, world, n, tracer.get());
   }
   return 0;
 }

@@ -18,6 +18,7 @@
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/eval/refine.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/tetra/filler.h"
@@ -303,7 +304,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     const std::vector<Clearance>& c = shellClearance;
     auto dc = [&](size_t i) {
       const glm::vec3 v = level.sh[i].c[0];
-      return 0.2126 * double(v.r) + 0.7152 * double(v.g) + 0.0722 * double(v.b);
+      return luminance(glm::dvec3(v));
     };
     stage.emplace("dilate", 0, "", show);
     std::vector<uint8_t> invalid(probes.size(), 0), isShell(probes.size(), 0);

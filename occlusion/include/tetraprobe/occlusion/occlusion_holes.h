@@ -64,9 +64,10 @@ class ProbesInFront {
   std::unique_ptr<Grids> grids_;
 };
 
-// The share of the all-occluded fallback in the `tet` answer at a world point with normal `normal`
-// (applyOcclusion's `fallback`, runtime/occlusion.h): 0 where the point sees some of its tet's probes.
-// 0 for a level without occlusion or a point with no tet.
+// The share of the all-occluded fallback at a world point with normal `normal` by its tet's own occlusion
+// data (ShadeRecord::ownFallback of query.explain, runtime/shade.h; before the face blend): 0 where the point
+// sees some of its tet's probes. 0 for a level without occlusion, a point with no tet, or a `query` (of
+// `level`) with occlusion off.
 float occlusionFallbackShare(const Level& level, const ProbeQuery& query, const glm::dvec3& point,
                              const glm::vec3& normal);
 

@@ -67,7 +67,7 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
                               const glm::vec3& normal);
 
-// The visibility of the located tet's probes the run-time lookup uses (ProbeQuery::shade,
+// The visibility of the located tet's probes the run-time lookup uses (shadeLocated, shade.h;
 // tetraprobeLookupVisibility), from the tet's own `visibility` (occlusionVisibility at `local`, `normal`):
 // blended near faces by faceBlendVisibility when the point is inside the hull (loc.outerCell < 0), else
 // unchanged (outside the hull, no tet, or a level without occlusion).

@@ -14,6 +14,8 @@
 
 namespace tetraprobe {
 
+struct ShadeRecord;  // shade.h
+
 // A coarse uniform grid over the probe bounds (local frame) naming, per cell, a tet near the cell centre to
 // start a walk from, so walks stay short. Shared by the CPU query and the GPU upload (same layout as
 // shaders/tetraprobe_layout.glsl). Cell (x,y,z) is at index x + dims.x * (y + dims.y * z).
@@ -84,13 +86,20 @@ class ProbeQuery {
   // Irradiance E in W/m^2 at a world-space point on a surface with unit normal `normal`. When `tetCache` is
   // given it is read as the walk's starting hint and updated with the tet found (per-object caching); the
   // answer is the same, bit for bit, as without it.
-  // The level's stored occlusion (Level::occlusion, occlusion.h) drops the probes the point cannot see:
+  // It is shadeLocated(level, occlusion(), locate(world), world, normal) (shade.h): the level's stored
+  // occlusion (Level::occlusion, occlusion.h) drops the probes the point cannot see:
   // w = applyOcclusion(weights, lookupVisibility(level, occlusion, location, own, local, normal)) with own the
   // tet's occlusionVisibility, the normal biasing the point off its surface (a zero normal: no bias), blended
   // inside the hull with the face neighbours' (face_blend.h); a point that sees none falls back
   // (occludedIrradiance). Outside the hull `tet` is the outer cell's hull tet, whose occlusion applies to the
   // cell's weights the same way (no blend).
   glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;
+
+  // irradiance(world, normal) with the record of how it was made (ShadeRecord, shade.h: the location, the
+  // visibility before and after the face blend, the weights blended, the fallback): returns the same bits,
+  // which `record.answer` holds too. For tools that explain or audit an answer (`query --explain`, the
+  // bake's occlusion-hole finder); a few SH evaluations dearer than irradiance().
+  glm::vec3 explain(const glm::dvec3& world, const glm::vec3& normal, ShadeRecord& record) const;
 
   // Batch form: out[i] = irradiance(world[i], normal[i]), bit-identical. Runs on up to `threads` threads
   // (0 = all cores), each on a contiguous share of the items, interleaving groups of 16 queries with
@@ -103,6 +112,8 @@ class ProbeQuery {
   // Not to be changed while other threads query.
   void setUseOcclusion(bool use) { useOcclusion_ = use; }
   bool usesOcclusion() const { return useOcclusion_ && !level_.occlusion.empty(); }
+  // The occlusion irradiance() applies (shadeLocated's `occlusion`): the level's, or null when off or empty.
+  const LevelOcclusion* occlusion() const { return usesOcclusion() ? &level_.occlusion : nullptr; }
 
   const Level& level() const { return level_; }
   const StartGrid& startGrid() const { return grid_; }
@@ -119,9 +130,6 @@ class ProbeQuery {
   Location walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) const;
   Location outerScan(const glm::dvec3& x, const Location& fallback) const;
   int32_t startTet(const glm::dvec3& x, int32_t leafTet) const;
-  // `frameTet`/`frame` (optional): a cache of the last occluded tet's BaryFrame (irradianceBatch).
-  glm::vec3 shade(const Location& loc, const glm::dvec3& world, const glm::vec3& normal,
-                  int32_t* frameTet = nullptr, BaryFrame* frame = nullptr) const;
   void batchRange(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t begin,
                   size_t end) const;
 
