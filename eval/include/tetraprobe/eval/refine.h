@@ -53,7 +53,7 @@ ErrorEstimate scoreRefinePoints(const Level& level, std::vector<RefinePoint>& po
 // the free distance along the normal when that is less). The error is the surface's, so the probe goes
 // where it sees nearly what the surface sees: on Veach Ajar (1 m spacing) a wall beside the door gap is
 // 12-17 W/m^2 while 0.5 m in front of it the truth is 148, and camera-view mean rel. error fell from 0.220
-// (spacing / 2) to 0.199 (/ 4) and 0.168 (/ 8) (docs/accuracy.md has every level).
+// (spacing / 2) to 0.199 (/ 4) and 0.168 (/ 8) (docs/accuracy.md, Tried).
 inline constexpr double kRefineOffsetFraction = 1.0 / 8.0;
 
 // Up to `budget` new probe positions (world metres) in front of the worst points (largest e first, ties by
