@@ -927,7 +927,7 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
 }
 
 // The visibility the lookup uses at located point loc (local x, normal n): its tet's, blended near faces
-// with the neighbours' inside the hull (ProbeQuery::shade).
+// with the neighbours' inside the hull (shadeLocated, runtime/shade.h).
 vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
   vec4 vis = tetraprobeOccVisibility(loc.tet, x, n);
   if (loc.outerCell < 0) vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
