@@ -7,8 +7,11 @@ single-sided and face into the rooms (counter-clockwise seen from inside); the p
 are closed and face outward. Large faces are cut into tiles of at most TILE metres. Standard library only;
 the output is deterministic, so re-running it reproduces the committed files byte for byte.
 """
-import math
 import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from scene_mesh import Mesh, X, Y, Z, write_obj  # noqa: E402
 
 TILE = 1.0
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -27,71 +30,13 @@ MATERIALS = [
 ]
 
 
-def sub(a, b):
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-class Mesh:
-    def __init__(self):
-        self.vertices = []
-        self.groups = []  # (material, [faces as 1-based index tuples])
-
-    def rect(self, material, origin, u, v, normal):
-        """Rectangle origin + s*u + t*v (s, t in [0,1]) facing `normal`, tiled, as counter-clockwise quads."""
-        if dot(cross(u, v), normal) < 0:
-            u, v = v, u
-        assert dot(cross(u, v), normal) > 0, "normal must not lie in the rectangle"
-        nu = max(1, math.ceil(math.sqrt(dot(u, u)) / TILE - 1e-9))
-        nv = max(1, math.ceil(math.sqrt(dot(v, v)) / TILE - 1e-9))
-        base = len(self.vertices)
-        for j in range(nv + 1):
-            for i in range(nu + 1):
-                s, t = i / nu, j / nv
-                self.vertices.append(tuple(origin[k] + s * u[k] + t * v[k] for k in range(3)))
-        faces = []
-        for j in range(nv):
-            for i in range(nu):
-                a = base + j * (nu + 1) + i + 1
-                faces.append((a, a + 1, a + 1 + (nu + 1), a + (nu + 1)))
-        self.groups.append((material, faces))
-
-    def axis_rect(self, material, axis, coord, lo, hi, facing):
-        """Axis-aligned rectangle on plane `axis` = coord, spanning lo..hi in the other two axes, facing +-axis."""
-        a, b = [k for k in range(3) if k != axis]
-        origin = [0.0, 0.0, 0.0]
-        origin[axis], origin[a], origin[b] = coord, lo[0], lo[1]
-        u = [0.0, 0.0, 0.0]
-        v = [0.0, 0.0, 0.0]
-        u[a] = hi[0] - lo[0]
-        v[b] = hi[1] - lo[1]
-        n = [0.0, 0.0, 0.0]
-        n[axis] = facing
-        self.rect(material, tuple(origin), tuple(u), tuple(v), tuple(n))
-
-    def box(self, material, lo, hi):
-        """Closed box, faces pointing out."""
-        for axis in range(3):
-            a, b = [k for k in range(3) if k != axis]
-            self.axis_rect(material, axis, lo[axis], (lo[a], lo[b]), (hi[a], hi[b]), -1.0)
-            self.axis_rect(material, axis, hi[axis], (lo[a], lo[b]), (hi[a], hi[b]), +1.0)
-
-
-X, Y, Z = 0, 1, 2
 WIDTH, DEPTH, HEIGHT = 8.2, 4.0, 3.0
 WALL0, WALL1 = 4.0, 4.2
 DOOR_Z0, DOOR_Z1, DOOR_H = 1.5, 2.5, 2.1
 
 
 def build():
-    m = Mesh()
+    m = Mesh(TILE)
     # Shell: single-sided, facing into the rooms. Floor and ceiling run under/over the partition.
     # axis_rect spans (lo, hi) in the two remaining axes in order: y plane -> (x, z), x plane -> (y, z),
     # z plane -> (x, y).
@@ -127,31 +72,8 @@ def build():
     return m
 
 
-def fmt(c):
-    s = ("%.4f" % c).rstrip("0").rstrip(".")
-    return "0" if s in ("", "-0") else s
-
-
 def write(m):
-    obj = os.path.join(HERE, "two_rooms.obj")
-    mtl = os.path.join(HERE, "two_rooms.mtl")
-    with open(mtl, "w", newline="\n") as f:
-        f.write("# two_rooms.mtl: written by make_two_rooms.py. Kd = albedo, Ke = radiance W/(m^2 sr).\n")
-        for name, kd, ke in MATERIALS:
-            f.write("\nnewmtl %s\nKd %.4f %.4f %.4f\n" % ((name,) + kd))
-            if ke:
-                f.write("Ke %.4f %.4f %.4f\n" % ke)
-    with open(obj, "w", newline="\n") as f:
-        f.write("# two_rooms.obj: written by make_two_rooms.py (metres, +Y up). Do not edit by hand.\n")
-        f.write("mtllib two_rooms.mtl\n")
-        for v in m.vertices:
-            f.write("v %s\n" % " ".join(fmt(c) for c in v))
-        for material, faces in m.groups:
-            f.write("usemtl %s\n" % material)
-            for face in faces:
-                f.write("f %d %d %d %d\n" % face)
-    quads = sum(len(f) for _, f in m.groups)
-    print("wrote %s (%d vertices, %d quads = %d triangles) and %s" % (obj, len(m.vertices), quads, 2 * quads, mtl))
+    write_obj(m, HERE, "two_rooms", MATERIALS, "make_two_rooms.py")
 
 
 if __name__ == "__main__":
