@@ -20,7 +20,7 @@ links=$(grep -h 'INTERFACE_LINK_LIBRARIES' $targets || true)
 if echo "$links" | grep -iqE "$forbidden"; then fail "installed targets link a build-side library: $links"; fi
 echo "installed link interfaces:"; echo "$links" | sed 's/^ */  /'
 # ...and nothing but the runtime libraries, their headers, the GLSL includes and the package files is installed.
-extra=$(cd "$work/prefix" && find . -type f | grep -vE '^\./include/tetraprobe/runtime/[a-z_]+\.h$|^\./lib[^/]*/libtetraprobe_runtime(_vulkan)?\.a$|^\./lib[^/]*/cmake/tetraprobe/[A-Za-z_-]+\.cmake$|^\./share/tetraprobe/shaders/tetraprobe[a-z_]*\.glsl$' || true)
+extra=$(cd "$work/prefix" && find . -type f | grep -vE '^\./include/tetraprobe/runtime/[a-z0-9_]+\.h$|^\./lib[^/]*/libtetraprobe_runtime(_vulkan)?\.a$|^\./lib[^/]*/cmake/tetraprobe/[A-Za-z_-]+\.cmake$|^\./share/tetraprobe/shaders/tetraprobe[a-z_]*\.glsl$' || true)
 [ -z "$extra" ] || fail "unexpected files installed: $extra"
 
 # 2. The sample builds against the installed package only (a separate CMake project).

@@ -19,6 +19,30 @@
 
 namespace tetraprobe::test {
 
+// Records `record` into a one-time command buffer, submits it to the context's queue and waits.
+inline void submitAndWait(const render_detail::VulkanContext& ctx,
+                          const std::function<void(VkCommandBuffer)>& record) {
+  using render_detail::vkCheck;
+  const VkDevice dev = ctx.device();
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = ctx.commandPool();
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  VkCommandBuffer cmd;
+  vkCheck(vkAllocateCommandBuffers(dev, &cai, &cmd), "vkAllocateCommandBuffers");
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  vkCheck(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  record(cmd);
+  vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd;
+  vkCheck(vkQueueSubmit(ctx.queue(), 1, &submit, VK_NULL_HANDLE), "vkQueueSubmit");
+  vkCheck(vkQueueWaitIdle(ctx.queue()), "vkQueueWaitIdle");
+  vkFreeCommandBuffers(dev, ctx.commandPool(), 1, &cmd);
+}
+
 using render_detail::CleanupStack;
 using render_detail::GpuBuffer;
 using render_detail::vkCheck;
@@ -139,37 +163,19 @@ class PointLookup {
   // One submission: `record` (if any: e.g. an SH update), then the lookup of every point against upload i.
   std::vector<glm::vec3> run(size_t i, const std::function<void(VkCommandBuffer)>& record = {}) {
     const VkDevice dev = ctx_.device();
-    VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    cai.commandPool = ctx_.commandPool();
-    cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    cai.commandBufferCount = 1;
-    VkCommandBuffer cmd;
-    vkCheck(vkAllocateCommandBuffers(dev, &cai, &cmd), "vkAllocateCommandBuffers");
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    vkCheck(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    if (record) record(cmd);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-    const VkDescriptorSet sets[2] = {sets_[i], ioSet_};
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 2, sets, 0, nullptr);
-    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(uint32_t), &count_);
-    vkCmdDispatch(cmd, (count_ + 63) / 64, 1, 1);
-    VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toHost.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost,
-                         0, nullptr, 0, nullptr);
-    vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    VkFence fence;
-    vkCheck(vkCreateFence(dev, &fci, nullptr, &fence), "vkCreateFence");
-    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &cmd;
-    vkCheck(vkQueueSubmit(ctx_.queue(), 1, &submit, fence), "vkQueueSubmit");
-    vkCheck(vkWaitForFences(dev, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-    vkDestroyFence(dev, fence, nullptr);
-    vkFreeCommandBuffers(dev, ctx_.commandPool(), 1, &cmd);
+    submitAndWait(ctx_, [&](VkCommandBuffer cmd) {
+      if (record) record(cmd);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+      const VkDescriptorSet sets[2] = {sets_[i], ioSet_};
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 2, sets, 0, nullptr);
+      vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(uint32_t), &count_);
+      vkCmdDispatch(cmd, (count_ + 63) / 64, 1, 1);
+      VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+      toHost.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+      toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1,
+                           &toHost, 0, nullptr, 0, nullptr);
+    });
     std::vector<glm::vec3> out(count_);
     void* mapped = nullptr;
     vkCheck(vkMapMemory(dev, results_.memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory");

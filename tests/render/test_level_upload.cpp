@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lookup_scene.h"
+#include "point_lookup.h"
 #include "tetraprobe/runtime/probe_update.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
@@ -24,29 +25,7 @@ using render_detail::CleanupStack;
 using render_detail::GpuBuffer;
 using render_detail::vkCheck;
 using render_detail::VulkanContext;
-
-// Records `record` into a one-time command buffer, submits it to the context's queue and waits.
-template <typename Record>
-void submitAndWait(const VulkanContext& ctx, const Record& record) {
-  const VkDevice dev = ctx.device();
-  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  cai.commandPool = ctx.commandPool();
-  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  cai.commandBufferCount = 1;
-  VkCommandBuffer cmd;
-  vkCheck(vkAllocateCommandBuffers(dev, &cai, &cmd), "vkAllocateCommandBuffers");
-  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  vkCheck(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-  record(cmd);
-  vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  submit.commandBufferCount = 1;
-  submit.pCommandBuffers = &cmd;
-  vkCheck(vkQueueSubmit(ctx.queue(), 1, &submit, VK_NULL_HANDLE), "vkQueueSubmit");
-  vkCheck(vkQueueWaitIdle(ctx.queue()), "vkQueueWaitIdle");
-  vkFreeCommandBuffers(dev, ctx.commandPool(), 1, &cmd);
-}
+using test::submitAndWait;
 
 // Every byte of every level buffer, copied on the GPU into host-visible memory and read there.
 std::vector<std::vector<char>> readBack(const VulkanContext& ctx, const VulkanLevelBuffers& buffers) {
