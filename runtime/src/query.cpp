@@ -585,6 +585,12 @@ glm::vec3 ProbeQuery::irradiance(const glm::dvec3& world, const glm::vec3& norma
   return shadeLocated(level_, occlusion(), loc, world, normal);
 }
 
+ShRgb ProbeQuery::interpolatedSh(const glm::dvec3& world, int32_t* tetCache) const {
+  const Location loc = locate(world, tetCache ? *tetCache : -1);
+  if (tetCache) *tetCache = loc.tet;
+  return shadeLocatedSh(level_, occlusion(), loc, world);
+}
+
 glm::vec3 ProbeQuery::explain(const glm::dvec3& world, const glm::vec3& normal, ShadeRecord& record) const {
   return shadeLocated(level_, occlusion(), locate(world), world, normal, &record);
 }

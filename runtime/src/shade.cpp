@@ -96,4 +96,33 @@ glm::vec3 shadeLocated(const Level& level, const LevelOcclusion* occlusion, cons
   return answer;
 }
 
+ShRgb shadeLocatedSh(const Level& level, const LevelOcclusion* occlusion, const Location& loc,
+                     const glm::dvec3& world) {
+  if (loc.tet < 0) return ShRgb{};
+  const Tet& t = level.tets[size_t(loc.tet)];
+  const ShRgb* sh[4];
+  for (int i = 0; i < 4; ++i) sh[i] = &level.sh[size_t(t.v[i])];
+  const auto blend = [&sh](const glm::vec4& w) {
+    const float f[4] = {w.x, w.y, w.z, w.w};
+    return shBlend(sh, f, 4);
+  };
+  if (occlusion == nullptr) return blend(loc.weights);
+  // shadeLocated's visibility with a zero normal: the point's own, no bias, no probe behind a surface.
+  const glm::vec3 local(world - level.origin), none(0.0f);
+  const glm::vec4 own = occlusionVisibility(level, *occlusion, loc.tet, local, none);
+  const glm::vec4 vis = lookupVisibility(level, *occlusion, loc, own, local, none);
+  float fallback = 0.0f;
+  const glm::vec4 weights = applyOcclusion(loc.weights, vis, &fallback);
+  if (!(fallback > 0.0f)) return blend(weights);
+  // occludedIrradiance's nearest-probe blend with every probe in front (front = 1), without its cap.
+  const glm::vec4 u = applyOcclusion(loc.weights, glm::vec4(1.0f));
+  glm::vec4 p = fallbackLean(u, glm::vec4(1.0f));
+  p = p * p;
+  p = p * p;
+  p = p * p;
+  const float ps = p.x + p.y + p.z + p.w;
+  p = ps > 0.0f ? p / ps : u;
+  return blend((1.0f - fallback) * weights + fallback * p);
+}
+
 }  // namespace tetraprobe

@@ -1,10 +1,13 @@
 // engine_integration: what a game does with a baked level, through the installed package only.
 // Loads a level, moves a sphere along a path through it, and lights the sphere two ways each frame:
-// - per object: one ProbeQuery::irradiance per axis direction at the sphere's centre (an "ambient cube"),
-//   with the tet cached from the previous frame, so each frame's walk starts next to where it ends;
+// - per object: one ProbeQuery::interpolatedSh at the sphere's centre (the L2 SH a forward shader takes, as
+//   Unity's GetInterpolatedProbe), with the tet cached from the previous frame, so each frame's walk starts
+//   next to where it ends; every surface normal is then shaded from that SH (shIrradiance);
 // - per pixel: the irradiance at each of the sphere's surface points with its own normal, in one
 //   irradianceBatch call (CPU; an engine would run the same lookup per pixel in a shader, tetraprobe.glsl).
-// It prints a line per frame and the per-object error against the per-pixel answer.
+// It prints a line per frame: the per-object error against the per-pixel answer over the sphere, and at the
+// centre the largest relative difference between the SH's and irradiance()'s answer over the six axis
+// normals (0 without occlusion; with it the SH sees the probes from the centre, irradiance() from a surface).
 // Then the GPU side (gpu_level.cpp, skipped without a Vulkan device): the level's six storage buffers
 // uploaded to device-local memory through a staging copy recorded into the engine's command buffer, the
 // buffers the engine owns printed, and part of the level relit in place (setProbeSh + cmdUpdateLevelSh).
@@ -14,14 +17,17 @@
 // and the GPU's probe buffer after the relight equals the packing of the relit level byte for byte.
 //
 // Usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]  (default path: the two_rooms sample's rooms)
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <numbers>
 #include <vector>
 
 #include <tetraprobe/runtime/level.h>
 #include <tetraprobe/runtime/luminance.h>
 #include <tetraprobe/runtime/query.h>
+#include <tetraprobe/runtime/sh.h>
 
 #include "gpu_level.h"
 
@@ -68,20 +74,22 @@ int main(int argc, char** argv) {
   std::vector<glm::vec3> perPixel(normals.size());
   for (int f = 0; f < frames; ++f) {
     const glm::dvec3 centre = from + (to - from) * (double(f) / (frames - 1));
-    // Per object: the ambient cube, six queries sharing the cached tet.
-    glm::vec3 cube[6];
-    for (int a = 0; a < 6; ++a) {
-      cube[a] = query.irradiance(centre, axes[a], &cachedTet);
-      ok = ok && cube[a] == query.irradiance(centre, axes[a]);  // the cache changes the speed, not the answer
+    // Per object: the interpolated SH at the centre, from the cached tet.
+    const tetraprobe::ShRgb sh = query.interpolatedSh(centre, &cachedTet);
+    const tetraprobe::ShRgb cold = query.interpolatedSh(centre);
+    ok = ok && std::memcmp(&sh, &cold, sizeof sh) == 0;  // the cache changes the speed, not the answer
+    // At the centre, the SH against the per-pixel lookup for a few normals.
+    double centreDiff = 0;
+    for (const glm::vec3& n : axes) {
+      const float a = luminance(tetraprobe::shIrradiance(sh, n)), b = luminance(query.irradiance(centre, n));
+      centreDiff = std::max(centreDiff, std::abs(double(a) - b) / std::max(std::abs(double(b)), 1e-6));
     }
     // Per pixel: every surface point with its own normal.
     for (size_t k = 0; k < normals.size(); ++k) points[k] = centre + radius * glm::dvec3(normals[k]);
     query.irradianceBatch(points.data(), normals.data(), perPixel.data(), points.size(), 1);
     double meanPixel = 0, meanError = 0;
     for (size_t k = 0; k < normals.size(); ++k) {
-      const glm::vec3 n = normals[k], w = n * n;  // ambient-cube weights: squared normal components
-      const glm::vec3 object =
-          w.x * cube[n.x > 0 ? 0 : 1] + w.y * cube[n.y > 0 ? 2 : 3] + w.z * cube[n.z > 0 ? 4 : 5];
+      const glm::vec3 object = tetraprobe::shIrradiance(sh, normals[k]);
       ok = ok && std::isfinite(luminance(perPixel[k])) && std::isfinite(luminance(object));
       meanPixel += luminance(perPixel[k]);
       meanError += std::abs(luminance(object) - luminance(perPixel[k]));
@@ -92,9 +100,9 @@ int main(int argc, char** argv) {
     if (f == frames - 1) lastRoom = float(meanPixel);
     std::printf(
         "frame %2d  centre (%.2f, %.2f, %.2f)  tet %6d  E up %8.4f  per-pixel mean %8.4f W/m^2"
-        "  per-object error %5.1f %%\n",
-        f, centre.x, centre.y, centre.z, cachedTet, luminance(cube[2]), meanPixel,
-        meanPixel > 0 ? 100.0 * meanError / meanPixel : 0.0);
+        "  per-object error %5.1f %%  centre SH vs lookup %.1e\n",
+        f, centre.x, centre.y, centre.z, cachedTet, luminance(tetraprobe::shIrradiance(sh, axes[2])),
+        meanPixel, meanPixel > 0 ? 100.0 * meanError / meanPixel : 0.0, centreDiff);
   }
   if (argc == 2) ok = ok && lastRoom < firstRoom;  // the default path ends in the unlit room
   ok = runGpuLevel(level, query) && ok;            // relights `level`: after the CPU frames

@@ -11,6 +11,7 @@
 
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
 
@@ -94,6 +95,25 @@ class ProbeQuery {
   // (occludedIrradiance). Outside the hull `tet` is the outer cell's hull tet, whose occlusion applies to the
   // cell's weights the same way (no blend).
   glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal, int32_t* tetCache = nullptr) const;
+
+  // The interpolated L2 SH at a world-space point, for an object that lights its own normals from it (Unity's
+  // LightProbes.GetInterpolatedProbe): 9 RGB coefficients of incident radiance in W/(m^2 sr), sh.h's real
+  // basis (index l*(l+1)+m, orthonormal, no Condon-Shortley phase), of radiance, not irradiance:
+  // shIrradiance(sh, n) gives E in W/m^2 for unit normal n. On an L1 level coefficients 4..8 are 0.
+  // It is shadeLocatedSh(level, occlusion(), locate(world), world) (shade.h): the probes of the same tet or
+  // outer cell as irradiance(), blended with the same weights, outside the hull too (the outer cell's,
+  // continuous). The level's occlusion is applied as for a volume, from the point itself with no normal (a
+  // zero normal in irradiance()'s terms: no bias off a surface, no probe counted behind one), blended across
+  // faces and falling back as irradiance() does: one SH answers every normal of the object, so there is no
+  // single surface to bias from or to put probes behind. Hence:
+  //   without occlusion: shIrradiance(interpolatedSh(x), n) == irradiance(x, n) bit for bit, for every n;
+  //   with occlusion: equal where the visibility irradiance() computes does not depend on n and no fallback
+  //   runs; elsewhere it is the object-centre answer (irradiance() biases a surface point off its surface
+  //   and drops probes behind it; its fallback caps by the unoccluded blend per normal, which SH cannot).
+  // `tetCache` as in irradiance(): the object's tet from last call, read as the walk's hint and updated; the
+  // answer is the same bits with or without it. A level with no tets gives zero SH. Thread-safe for
+  // concurrent const use (each object its own tetCache).
+  ShRgb interpolatedSh(const glm::dvec3& world, int32_t* tetCache = nullptr) const;
 
   // irradiance(world, normal) with the record of how it was made (ShadeRecord, shade.h: the location, the
   // visibility before and after the face blend, the weights blended, the fallback): returns the same bits,

@@ -2,7 +2,8 @@
 // occlusion (occlusion.h) and the face blend (face_blend.h) applied, and on request a record of how that
 // answer was made. The one C++ implementation of the rule: ProbeQuery::irradiance and irradianceBatch,
 // eval's tet+occlusion method, `tetraprobe query --explain` and the bake's occlusion-hole finder all call
-// shadeLocated(); shaders/tetraprobe.glsl mirrors it (tetraprobeIrradiance).
+// shadeLocated(); shaders/tetraprobe.glsl mirrors it (tetraprobeIrradiance). Its per-object SH form,
+// shadeLocatedSh(), serves ProbeQuery::interpolatedSh.
 // Permissive: standard library and GLM only.
 #pragma once
 
@@ -14,6 +15,7 @@
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/occlusion_data.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/sh.h"
 
 namespace tetraprobe {
 
@@ -64,5 +66,20 @@ struct ShadeFrameCache {
 glm::vec3 shadeLocated(const Level& level, const LevelOcclusion* occlusion, const Location& loc,
                        const glm::dvec3& world, const glm::vec3& normal, ShadeRecord* record = nullptr,
                        ShadeFrameCache* cache = nullptr);
+
+// The interpolated SH (incident radiance, W/(m^2 sr), sh.h's basis and order; an L1 level's coefficients 4..8
+// stay 0) at `world` located at `loc` (as shadeLocated takes them), for an object that shades its own normals
+// from it afterwards (ProbeQuery::interpolatedSh). Occlusion is decided once for the point itself, not per
+// surface: the visibility is shadeLocated's with a zero normal (no bias off a surface, every probe counted in
+// front), blended near faces the same way, so that
+//   occlusion null: shIrradiance(shadeLocatedSh(...), n) == shadeLocated(..., n) bit for bit, for every n;
+//   occlusion given: the SH of applyOcclusion(loc.weights, v) with v = lookupVisibility(..., normal 0); where
+//   the fallback's share f is > 0, (1 - f) of that plus f of occludedIrradiance's nearest-probe blend
+//   p = u^8 / sum u^8 (every probe in front). occludedIrradiance's per-channel cap min(E(p), E(u)) depends
+//   on the normal and has no SH form, so it is left out: there the SH may be brighter than shadeLocated's.
+// Every case is a convex blend (non-negative weights summing to 1) of tet.v[0..3]'s SH. A location with
+// tet < 0 gives zero SH. Allocates nothing; never throws; thread-safe.
+ShRgb shadeLocatedSh(const Level& level, const LevelOcclusion* occlusion, const Location& loc,
+                     const glm::dvec3& world);
 
 }  // namespace tetraprobe
