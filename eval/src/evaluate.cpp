@@ -123,6 +123,11 @@ EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
   return report;
 }
 
+bool noPathLeaves(const EvalPoint& point) {
+  const glm::vec3 r = point.reference.irradiance;
+  return r.x == 0.0f && r.y == 0.0f && r.z == 0.0f;
+}
+
 void scoreMethod(EvalReport& report, const LookupMethod& method) {
   MethodResult m;
   m.name = method.name;
@@ -134,18 +139,45 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
   for (size_t i = 0; i < n; ++i)
     m.values[i] = method.lookup(report.points[i].surface.position, report.points[i].surface.normal);
 
-  std::vector<double> rel(n);
-  double se = 0.0, leak = 0.0, leakIndirect = 0.0;
-  size_t indirect = 0, gross = 0, dark = 0;
+  // The relative floor f: kRelFloorFraction of the open points' mean reference luminance (kFloor when
+  // there is no open point or no light).
+  size_t open = 0;
+  double brightness = 0.0;
+  for (const EvalPoint& p : report.points)
+    if (!noPathLeaves(p)) {
+      brightness += luminance(glm::dvec3(p.reference.irradiance));
+      ++open;
+    }
+  const double f = open > 0 && brightness > 0.0 ? kRelFloorFraction * brightness / double(open) : kFloor;
+  report.relFloor = f;
+  report.closedPoints = n - open;
+
+  std::vector<double> rel, relAbs(n);
+  rel.reserve(open);
+  double se = 0.0, seAbs = 0.0, leak = 0.0, leakIndirect = 0.0;
+  glm::dvec3 closedSum(0.0);
+  size_t indirect = 0, gross = 0, dark = 0, fallback = 0;
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 x = m.values[i], r = report.points[i].reference.irradiance;
-    double e = 0.0;
+    if (method.fallback &&
+        method.fallback(report.points[i].surface.position, report.points[i].surface.normal) > 0.0f)
+      ++fallback;
+    double e = 0.0, eAbs = 0.0, sq = 0.0;
     for (int c = 0; c < 3; ++c) {
-      const double d = double(x[c]) - double(r[c]);
-      se += d * d / (double(r[c]) * r[c] + kFloor);
-      e += std::abs(d) / std::sqrt(double(r[c]) * r[c] + kFloor);
+      const double d = double(x[c]) - double(r[c]), rc = double(r[c]);
+      seAbs += d * d / (rc * rc + kFloor);
+      eAbs += std::abs(d) / std::sqrt(rc * rc + kFloor);
+      const double scale = std::max(rc, f);
+      sq += d * d / (scale * scale);
+      e += std::abs(d) / scale;
     }
-    rel[i] = e / 3.0;
+    relAbs[i] = eAbs / 3.0;
+    if (noPathLeaves(report.points[i])) {  // reported apart: no scale to be relative to
+      closedSum += glm::dvec3(x);
+      continue;
+    }
+    se += sq;
+    rel.push_back(e / 3.0);
     const double yx = luminance(glm::dvec3(x)), yr = luminance(glm::dvec3(r));
     const double lx = std::max(yx, kFloor), lr = std::max(yr, kFloor);
     gross += (lx > 2.0 * lr || lx < 0.5 * lr) ? 1 : 0;
@@ -157,18 +189,30 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
       ++indirect;
     }
   }
+  // The p-th percentile of `v` (sorted in place): the ceil(p n)-th smallest.
+  auto percentile = [](std::vector<double>& v, double p) {
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(std::ceil(p * double(v.size()))) - 1)];
+  };
   if (indirect > 0) m.leakIndirect = leakIndirect / double(indirect);
-  if (n > 0) {
-    m.relmse = se / double(3 * n);
+  if (method.fallback && n > 0) m.fallback = double(fallback) / double(n);
+  if (n > open) m.closedMean = glm::vec3(closedSum / double(n - open));
+  if (open > 0) {
+    m.relmse = se / double(3 * open);
     double sum = 0.0;
     for (double e : rel) sum += e;
-    m.meanRelError = sum / double(n);
-    m.leak = leak / double(n);
-    m.grossError = double(gross) / double(n);
-    m.darkHoles = double(dark) / double(n);
-    std::vector<double> sorted = rel;
-    std::sort(sorted.begin(), sorted.end());
-    m.p95RelError = sorted[std::min(n - 1, size_t(std::ceil(0.95 * double(n))) - 1)];
+    m.meanRelError = sum / double(open);
+    m.leak = leak / double(open);
+    m.grossError = double(gross) / double(open);
+    m.darkHoles = double(dark) / double(open);
+    m.p95RelError = percentile(rel, 0.95);
+  }
+  if (n > 0) {
+    m.relmseAbsFloor = seAbs / double(3 * n);
+    double sum = 0.0;
+    for (double e : relAbs) sum += e;
+    m.meanRelAbsFloor = sum / double(n);
+    m.p95RelAbsFloor = percentile(relAbs, 0.95);
 
     // Cost: repeat full passes until ~20 ms have run, take the fastest pass (least disturbed).
     double bestNs = 1e300;
@@ -222,6 +266,11 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
     tet.bytes = totalBytes(tet.sections);
     tet.probes = probes;
     tet.lookup = [query](const glm::dvec3& p, const glm::vec3& n) { return query->irradiance(p, n); };
+    tet.fallback = [query](const glm::dvec3& p, const glm::vec3& n) {
+      ShadeRecord record;
+      query->explain(p, n, record);
+      return record.fallback;
+    };
     tet.batch = [query](const glm::dvec3* p, const glm::vec3* n, glm::vec3* out, size_t count) {
       query->irradianceBatch(p, n, out, count, 1);
     };
@@ -236,6 +285,11 @@ std::vector<LookupMethod> standardMethods(const Level& level) {
     tet.bytes = totalBytes(tet.sections);
     tet.probes = probes;
     tet.lookup = [plain](const glm::dvec3& p, const glm::vec3& n) { return plain->irradiance(p, n); };
+    tet.fallback = [plain](const glm::dvec3& p, const glm::vec3& n) {
+      ShadeRecord record;
+      plain->explain(p, n, record);
+      return record.fallback;
+    };
     tet.batch = [plain](const glm::dvec3* p, const glm::vec3* n, glm::vec3* out, size_t count) {
       plain->irradianceBatch(p, n, out, count, 1);
     };
@@ -385,10 +439,16 @@ LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOccl
   std::vector<ByteSection> sections = tetLookupBytes(*query, false);
   sections.push_back({"occlusion", occlusion->bytes()});
   const Level* lv = &level;
-  return {"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
-          [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
-            return shadeLocated(*lv, occlusion.get(), query->locate(p), p, n);
-          }};
+  LookupMethod m{"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
+                 [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
+                   return shadeLocated(*lv, occlusion.get(), query->locate(p), p, n);
+                 }};
+  m.fallback = [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {
+    ShadeRecord record;
+    shadeLocated(*lv, occlusion.get(), query->locate(p), p, n, &record);
+    return record.fallback;
+  };
+  return m;
 }
 
 }  // namespace tetraprobe

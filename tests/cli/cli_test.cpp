@@ -1036,6 +1036,22 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
        {"\"cpu_ns_per_query\"", "\"cpu_ns_per_query_coherent\"", "\"cpu_ns_per_query_random\"", "\"threads\"",
         "\"gpu_ms\"", "\"bytes_sections\"", "\"cell_grid\"", "\"outer_cells\"", "\"bytes_per_probe\""})
     EXPECT_NE(json.find(key), std::string::npos) << "no key " << key;
+  // The fallback share (a number for the tet lookup, null for methods without one), the former relative
+  // errors and the points no path leaves, reported apart (docs/evaluation.md).
+  const auto& methods = report.at("methods");
+  ASSERT_EQ(methods.at(0).at("name"), "tet");
+  EXPECT_TRUE(methods.at(0).at("fallback").is_number());
+  for (const auto& m : methods) {
+    for (const char* key : {"mean_rel_abs_floor", "relmse_abs_floor", "p95_rel_abs_floor"})
+      EXPECT_TRUE(m.at(key).is_number()) << key;
+    EXPECT_EQ(m.at("closed_mean_irradiance").size(), 3u);
+    if (m.at("name") == "nearest") {
+      EXPECT_TRUE(m.at("fallback").is_null());
+    }
+  }
+  EXPECT_TRUE(report.at("reference").at("closed_points").is_number_unsigned());
+  EXPECT_GT(report.at("reference").at("rel_floor").get<double>(), 0.0);
+  EXPECT_NE(r.out.find("| fallback |"), std::string::npos) << "no fallback column in\n" << r.out;
 }
 
 // --plot FILE.png writes the same chart as a PNG (1840 pixels wide: 2 per SVG unit) that reads back; a name

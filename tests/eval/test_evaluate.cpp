@@ -13,7 +13,9 @@
 #include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
+#include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/shade.h"
 
 namespace tetraprobe {
 namespace {
@@ -98,27 +100,75 @@ TEST(ScoreMethod, NearBlackPointsAgreeBelowTheFloor) {
   EXPECT_EQ(d.darkHoles, 0.0);
 }
 
-// A constant offset d gives relmse = mean over p, c of d^2 / (r^2 + 0.01) and mean_rel_error = mean over p of
-// mean over c of d / sqrt(r^2 + 0.01): the closed forms of docs/evaluation.md.
+// A constant offset d gives relmse = mean over p, c of d^2 / max(r, f)^2 and mean_rel_error = mean over p of
+// mean over c of d / max(r, f), f = 0.05 x the mean reference luminance; the former definition divides by
+// sqrt(r^2 + 0.01): the closed forms of docs/evaluation.md. Channel 2 of point 2 (set to 0.05 W/m^2) lies
+// below f, so the floor is exercised.
 TEST(ScoreMethod, RelmseAndMeanRelMatchClosedForm) {
   EvalReport report = handBuiltReport();
+  report.points[2].reference.irradiance.z = 0.05f;  // below f: the floor counts
   const MethodResult& m = scored(report, [](glm::vec3 r) { return r + glm::vec3(0.5f); });
-  double relmse = 0.0, meanRel = 0.0;
-  std::vector<double> perPoint;
+  double brightness = 0.0;
+  for (const EvalPoint& p : report.points) brightness += luminance(glm::dvec3(p.reference.irradiance));
+  const double f = 0.05 * brightness / 4.0;
+  ASSERT_GT(f, 0.05);
+  EXPECT_NEAR(report.relFloor, f, 1e-9);
+  EXPECT_EQ(report.closedPoints, 0u);
+  double relmse = 0.0, meanRel = 0.0, relmseAbs = 0.0, meanRelAbs = 0.0;
+  std::vector<double> perPoint, perPointAbs;
   for (const EvalPoint& p : report.points) {
-    double e = 0.0;
+    double e = 0.0, eAbs = 0.0;
     for (int c = 0; c < 3; ++c) {
       const double r = p.reference.irradiance[c];
-      relmse += 0.25 / (r * r + 0.01);
-      e += 0.5 / std::sqrt(r * r + 0.01);
+      relmse += 0.25 / (std::max(r, f) * std::max(r, f));
+      e += 0.5 / std::max(r, f);
+      relmseAbs += 0.25 / (r * r + 0.01);
+      eAbs += 0.5 / std::sqrt(r * r + 0.01);
     }
     perPoint.push_back(e / 3.0);
+    perPointAbs.push_back(eAbs / 3.0);
     meanRel += e / 3.0;
+    meanRelAbs += eAbs / 3.0;
   }
   EXPECT_NEAR(m.relmse, relmse / 12.0, 1e-6);
   EXPECT_NEAR(m.meanRelError, meanRel / 4.0, 1e-6);
+  EXPECT_NEAR(m.relmseAbsFloor, relmseAbs / 12.0, 1e-6);
+  EXPECT_NEAR(m.meanRelAbsFloor, meanRelAbs / 4.0, 1e-6);
   // p95 of 4 values is the largest (ceil(0.95 * 4) = 4th).
   EXPECT_NEAR(m.p95RelError, *std::max_element(perPoint.begin(), perPoint.end()), 1e-6);
+  EXPECT_NEAR(m.p95RelAbsFloor, *std::max_element(perPointAbs.begin(), perPointAbs.end()), 1e-6);
+}
+
+// One point in a closed cavity (reference exactly 0) where a method answers 27.9 W/m^2 does not decide the
+// table: it is counted apart (closedPoints, closedMean) and every per-point measure equals the one without
+// it, while the former definition still carries it (27.9 / sqrt(0.01) = 279 per channel).
+TEST(ScoreMethod, PointNoPathLeavesIsReportedApart) {
+  EvalReport open = handBuiltReport();
+  auto answer = [](glm::vec3 r) { return r == glm::vec3(0.0f) ? glm::vec3(27.9f) : r * 1.5f; };
+  const MethodResult without = scored(open, answer);
+  EvalReport report = handBuiltReport();
+  EvalPoint closed;
+  closed.surface.position = glm::dvec3(4.0, 0.0, 0.0);
+  closed.surface.normal = glm::vec3(0, 1, 0);
+  closed.indirectOnly = true;  // so that leak_indirect would see it, were it not apart
+  report.points.push_back(closed);
+  ASSERT_TRUE(noPathLeaves(report.points.back()));
+  ASSERT_FALSE(noPathLeaves(report.points[0]));
+  const MethodResult& m = scored(report, answer);
+  EXPECT_EQ(report.closedPoints, 1u);
+  EXPECT_EQ(report.relFloor, open.relFloor);
+  EXPECT_EQ(m.closedMean, glm::vec3(27.9f));
+  EXPECT_EQ(without.closedMean, glm::vec3(0.0f));
+  EXPECT_EQ(m.meanRelError, without.meanRelError);
+  EXPECT_EQ(m.p95RelError, without.p95RelError);
+  EXPECT_EQ(m.relmse, without.relmse);
+  EXPECT_EQ(m.leak, without.leak);
+  EXPECT_EQ(m.leakIndirect, without.leakIndirect);
+  EXPECT_EQ(m.grossError, without.grossError);
+  EXPECT_EQ(m.darkHoles, without.darkHoles);
+  // The former definition: the closed point adds 279 to the sum over 5 points.
+  EXPECT_NEAR(m.meanRelAbsFloor, (4.0 * without.meanRelAbsFloor + 27.9 / 0.1) / 5.0, 1e-4);
+  EXPECT_GT(m.meanRelAbsFloor, 50.0 * m.meanRelError);
 }
 
 // leak_indirect averages over the points lit only indirectly, and only those.
@@ -249,6 +299,69 @@ TEST(OcclusionMethod, IsTheTetLookupWithTheLevelStoringTheData) {
     fallback += occlusionFallbackShare(stored, query, p.position, p.normal) > 0.0f;
   }
   EXPECT_GT(fallback, 0u);  // the fallback is among the cases
+}
+
+// The fallback column counts the points whose final answer falls back: in a room with a closed closet between
+// the probes, the tet's own data hides every probe from each point of the closet's inner floor (the bake's
+// hole count), the face blend gives some of them back a probe, and the points on the room's floor far from
+// the closet see some. `tet`'s share is the count over the points of ShadeRecord::fallback > 0 (after the
+// face blend, not the own-data count), `tet (no occlusion)` never falls back and `nearest` has no fallback.
+TEST(StandardMethods, FallbackShareIsTheCountOverPoints) {
+  Scene s;
+  const uint32_t grey = test::addMaterial(s, glm::vec3(0.5f));
+  test::addBox(s, {-2, 0, -2}, {2, 2.5f, 2}, /*inward=*/true, grey);
+  test::addBox(s, {-0.25f, 0.4f, -0.25f}, {0.25f, 1.1f, 0.25f}, /*inward=*/false, grey);
+  test::addBox(s, {-0.24f, 0.41f, -0.24f}, {0.24f, 1.09f, 0.24f}, /*inward=*/true, grey);
+  const SceneTracer tracer(s);
+  std::vector<glm::dvec3> probes;
+  for (double z : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7})
+    for (double y : {0.3, 1.2, 2.2})
+      for (double x : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7}) probes.push_back({x, y, z});
+  Level level = test::bakedLevel(tracer, probes, 1);
+  for (ShRgb& sh : level.sh) sh.c[0] = glm::vec3(1.0f);
+  OcclusionOptions o;
+  o.progress = false;
+  level.occlusion = buildOcclusion(tracer, level, o);
+  ASSERT_FALSE(level.occlusion.empty());
+
+  EvalReport report;
+  auto add = [&](double x, double y, double z) {
+    EvalPoint p;
+    p.surface.position = glm::dvec3(x, y, z);
+    p.surface.normal = glm::vec3(0, 1, 0);
+    p.reference.irradiance = glm::vec3(1.0f);
+    report.points.push_back(p);
+  };
+  const size_t inside = 25;
+  for (double x : {-0.2, -0.1, 0.0, 0.1, 0.2})
+    for (double z : {-0.2, -0.1, 0.0, 0.1, 0.2}) add(x, 0.4101, z);  // the closet's inner floor
+  for (double x : {-1.5, -0.8, 0.8, 1.5})
+    for (double z : {-1.5, 1.5}) add(x, 0.0001, z);  // the room's floor, in the open
+  const ProbeQuery query(level);
+  size_t explained = 0, own = 0;
+  for (const EvalPoint& p : report.points) {
+    ShadeRecord record;
+    query.explain(p.surface.position, p.surface.normal, record);
+    const bool inCloset = std::abs(p.surface.position.x) < 0.24;
+    explained += record.fallback > 0.0f ? 1 : 0;
+    own += record.ownFallback > 0.0f ? 1 : 0;
+    if (!inCloset) {
+      EXPECT_EQ(record.fallback, 0.0f) << "open floor at x " << p.surface.position.x;
+    }
+  }
+  EXPECT_EQ(own, inside) << "the closet's own data hides every probe from each inner point";
+  ASSERT_GT(explained, 0u);
+  ASSERT_LT(explained, inside) << "the face blend gives some inner points a probe back";
+
+  std::vector<LookupMethod> methods = standardMethods(level);
+  ASSERT_EQ(methods.size(), 3u);
+  for (const LookupMethod& m : methods) scoreMethod(report, m);
+  EXPECT_EQ(report.methods[0].name, "tet");
+  EXPECT_EQ(report.methods[0].fallback, double(explained) / double(report.points.size()));
+  EXPECT_EQ(report.methods[1].name, "tet (no occlusion)");
+  EXPECT_EQ(report.methods[1].fallback, 0.0);
+  EXPECT_EQ(report.methods[2].name, "nearest");
+  EXPECT_LT(report.methods[2].fallback, 0.0) << "n/a";
 }
 
 // The shuffled timing order is a permutation of the coherent one (the same work, another order).

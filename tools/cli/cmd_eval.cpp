@@ -246,6 +246,10 @@ nlohmann::json methodJson(const MethodResult& m, const std::string& coherentOrde
                       {"p95_rel_error", m.p95RelError},
                       {"leak", m.leak},
                       {"leak_indirect", m.leakIndirect},
+                      {"relmse_abs_floor", m.relmseAbsFloor},
+                      {"mean_rel_abs_floor", m.meanRelAbsFloor},
+                      {"p95_rel_abs_floor", m.p95RelAbsFloor},
+                      {"closed_mean_irradiance", {m.closedMean.x, m.closedMean.y, m.closedMean.z}},
                       {"cpu_ns_per_query", m.cpuNsPerQuery},
                       {"cpu_ns_per_query_single_thread_fastest", m.cpuNsPerQuery},
                       {"cpu_ns_per_query_coherent", m.cpuNsCoherent},
@@ -258,24 +262,28 @@ nlohmann::json methodJson(const MethodResult& m, const std::string& coherentOrde
                       {"bytes_per_probe", m.probes > 0 ? double(m.bytes) / double(m.probes) : 0.0},
                       {"bytes_per_probe_sections", perProbe}};
   j["gpu_ms"] = m.gpuMs >= 0.0 ? nlohmann::json(m.gpuMs) : nlohmann::json(nullptr);
+  j["fallback"] = m.fallback >= 0.0 ? nlohmann::json(m.fallback) : nlohmann::json(nullptr);
   return j;
 }
 
 std::string markdownTable(const EvalReport& report) {
   std::ostringstream md;
-  md << "| method | gross | dark | mean rel | p95 rel | relmse | leak_ind | bytes | bytes/probe | probes | "
-        "CPU ns coherent | CPU ns random | GPU ms |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md << "| method | gross | dark | fallback | mean rel | p95 rel | relmse | leak_ind | bytes | bytes/probe | "
+        "probes | CPU ns coherent | CPU ns random | GPU ms |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   char buf[512];
   for (const MethodResult& m : report.methods) {
     char gpu[32] = "-";
     if (m.gpuMs >= 0.0) std::snprintf(gpu, sizeof gpu, "%.1f", m.gpuMs);
+    char fallback[32] = "n/a";
+    if (m.fallback >= 0.0) std::snprintf(fallback, sizeof fallback, "%.2f %%", 100.0 * m.fallback);
     std::snprintf(
         buf, sizeof buf,
-        "| %s | %.1f %% | %.2f %% | %.3f | %.2f | %.3f | %.3f | %s | %.0f | %llu | %.1f | %.1f | %s |\n",
-        m.name.c_str(), 100.0 * m.grossError, 100.0 * m.darkHoles, m.meanRelError, m.p95RelError, m.relmse,
-        m.leakIndirect, mb(m.bytes).c_str(), m.probes > 0 ? double(m.bytes) / double(m.probes) : 0.0,
-        (unsigned long long)m.probes, m.cpuNsCoherent, m.cpuNsRandom, gpu);
+        "| %s | %.1f %% | %.2f %% | %s | %.3f | %.2f | %.3f | %.3f | %s | %.0f | %llu | %.1f | %.1f | %s |\n",
+        m.name.c_str(), 100.0 * m.grossError, 100.0 * m.darkHoles, fallback, m.meanRelError, m.p95RelError,
+        m.relmse, m.leakIndirect, mb(m.bytes).c_str(),
+        m.probes > 0 ? double(m.bytes) / double(m.probes) : 0.0, (unsigned long long)m.probes,
+        m.cpuNsCoherent, m.cpuNsRandom, gpu);
     md << buf;
   }
   return md.str();
@@ -548,12 +556,30 @@ int cmdEval(int argc, char** argv) {
           "  %zu points see none of their tet's probes (occlusion fallback): %zu of them gross, %zu dark\n",
           fallback, gross, dark);
     }
-    std::printf("  %-18s %8s %8s %8s %8s %8s %8s %8s %10s %9s %9s %8s\n", "method", "gross", "dark",
-                "mean_rel", "p95_rel", "relmse", "leak", "leak_ind", "bytes", "ns coh", "ns rand", "gpu ms");
-    for (const auto& m : report.methods)
-      std::printf("  %-18s %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f %10llu %9.1f %9.1f %8.1f\n",
-                  m.name.c_str(), m.grossError, m.darkHoles, m.meanRelError, m.p95RelError, m.relmse, m.leak,
-                  m.leakIndirect, (unsigned long long)m.bytes, m.cpuNsCoherent, m.cpuNsRandom, m.gpuMs);
+    std::printf(
+        "  relative errors over the %zu open points, floor f = %.4g W/m^2 (5 %% of their mean luminance); "
+        "*_abs: the former sqrt(r^2 + 0.01) over all points\n",
+        report.points.size() - report.closedPoints, report.relFloor);
+    std::printf("  %-18s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %10s %9s %9s %8s\n", "method", "gross",
+                "dark", "fallback", "mean_rel", "p95_rel", "relmse", "leak", "leak_ind", "mrel_abs",
+                "rmse_abs", "bytes", "ns coh", "ns rand", "gpu ms");
+    for (const auto& m : report.methods) {
+      char fallback[16] = "n/a";
+      if (m.fallback >= 0.0) std::snprintf(fallback, sizeof fallback, "%.4f", m.fallback);
+      std::printf(
+          "  %-18s %8.4f %8.4f %8s %8.4f %8.4f %8.4f %8.4f %8.4f %9.4f %9.4f %10llu %9.1f %9.1f %8.1f\n",
+          m.name.c_str(), m.grossError, m.darkHoles, fallback, m.meanRelError, m.p95RelError, m.relmse,
+          m.leak, m.leakIndirect, m.meanRelAbsFloor, m.relmseAbsFloor, (unsigned long long)m.bytes,
+          m.cpuNsCoherent, m.cpuNsRandom, m.gpuMs);
+    }
+    if (report.closedPoints > 0) {
+      std::printf(
+          "  %zu points no path leaves (reference exactly 0; left out above), mean answer (luminance):",
+          report.closedPoints);
+      for (const auto& m : report.methods)
+        std::printf(" %s %.4g", m.name.c_str(), luminance(glm::dvec3(m.closedMean)));
+      std::printf(" W/m^2\n");
+    }
   }
 
   // Sweep: re-bake at each spacing, score every method on the headline set's points (same references).
@@ -673,6 +699,8 @@ int cmdEval(int argc, char** argv) {
                             {"bounces", depth},
                             {"mean_rel_stderr", report.meanRelStderr},
                             {"indirect_only_points", report.indirectOnlyPoints},
+                            {"closed_points", report.closedPoints},
+                            {"rel_floor", report.relFloor},
                             {"seconds", report.referenceSeconds}};
       return nlohmann::json{{"reference", ref}, {"methods", methods}};
     };

@@ -1,9 +1,17 @@
 // Accuracy evaluation: compares probe lookups with path-traced ground truth at random surface points and
 // reports error against run time and memory. Build side (uses the Embree reference oracle).
 //
-// Error measures (per point p, channel c, lookup x, reference r, irradiance in W/m^2):
-//   relmse         = mean over p,c of (x - r)^2 / (r^2 + 0.01)
-//   rel error(p)   = mean over c of |x - r| / sqrt(r^2 + 0.01)
+// Points no path leaves: a point whose reference is exactly 0 in every channel (every path and every NEE
+// sample returned 0: a closed cavity, the inside of a wall). Such points have no scale to be relative to;
+// they are left out of every per-point mean below and reported apart (EvalReport::closedPoints and each
+// method's mean answer there, MethodResult::closedMean).
+//
+// Error measures over the other points ("open" points; per point p, channel c, lookup x, reference r,
+// irradiance in W/m^2), with the level-relative floor f = kRelFloorFraction x mean over open points of
+// luminance(r) (EvalReport::relFloor; 5 % of the level's mean brightness; 0.01 W/m^2 when no point is open
+// or none is lit):
+//   relmse         = mean over p,c of (x - r)^2 / max(r, f)^2
+//   rel error(p)   = mean over c of |x - r| / max(r, f)
 //   mean_rel_error = mean over p of rel error(p);  p95_rel_error = its 95th percentile
 //   leak           = mean over p of max(0, lum(x) - lum(r)) / max(lum(r), 0.01)   (light that should not be
 //   there)
@@ -12,7 +20,12 @@
 //   gross_error    = fraction of points with lum(x) > 2 lum(r) or lum(x) < lum(r) / 2 (off by more than 2x
 //   either way), luminances floored at 0.01 W/m^2 so two near-black values agree
 //   dark_holes     = fraction of points with lum(x) < 0.25 lum(r) (the same floor): black and dim polygons
-// The 0.01 W/m^2 floor keeps near-black points from dominating; it is ~1e-4 of a lit room's irradiance.
+//   fallback       = fraction of all points where the method's answer uses the all-occluded fallback
+//   (ShadeRecord::fallback > 0); n/a (< 0) for a method without one
+// The former definition, kept for comparison (the *AbsFloor fields, over all points, closed ones included):
+//   relmse = mean over p,c of (x - r)^2 / (r^2 + 0.01), rel error(p) = mean over c of |x - r| / sqrt(r^2 +
+//   0.01). Its fixed 0.01 W/m^2 floor lets one closed point with an answer of 27.9 W/m^2 add 279 / n to
+//   mean_rel; the measures above leave such points out and scale the floor with the level's brightness.
 #pragma once
 
 #include <cstdint>
@@ -34,6 +47,9 @@ namespace tetraprobe {
 
 // A point is "lit only indirectly" when less than this fraction of its reference comes directly.
 inline constexpr double kIndirectOnlyFraction = 0.01;
+
+// The relative errors' floor as a fraction of the open points' mean reference luminance (header comment).
+inline constexpr double kRelFloorFraction = 0.05;
 
 // Where the points are drawn.
 enum class EvalSampling {
@@ -64,9 +80,13 @@ struct MethodResult {
   double meanRelError = 0.0;
   double p95RelError = 0.0;
   double leak = 0.0;
-  double leakIndirect = 0.0;   // leak over the points lit only indirectly (EvalPoint::indirectOnly)
-  double grossError = 0.0;     // fraction of points off by more than 2x either way (luminance)
-  double darkHoles = 0.0;      // fraction of points below 0.25x the reference (luminance)
+  double leakIndirect = 0.0;  // leak over the points lit only indirectly (EvalPoint::indirectOnly)
+  double grossError = 0.0;    // fraction of points off by more than 2x either way (luminance)
+  double darkHoles = 0.0;     // fraction of points below 0.25x the reference (luminance)
+  double fallback = -1.0;     // fraction of all points where the answer falls back; < 0: n/a (no fallback)
+  // The former definition (fixed floor sqrt(r^2 + 0.01), over all points, closed ones included).
+  double relmseAbsFloor = 0.0, meanRelAbsFloor = 0.0, p95RelAbsFloor = 0.0;
+  glm::vec3 closedMean{0.0f};  // mean answer over the points no path leaves, W/m^2 (0 when there are none)
   double cpuNsPerQuery = 0.0;  // single thread, fastest of repeated timed passes over the points
   // timeLookup (below), filled by the caller: wall time per query of a pass over all timing points on
   // `threads` threads, median over the passes; in a camera's pixel order and in random order. 0 = not timed.
@@ -86,12 +106,18 @@ struct EvalPoint {
   bool indirectOnly = false;  // luminance(direct) < kIndirectOnlyFraction x luminance(reference)
 };
 
+// Whether no path leaves the point: its reference is exactly 0 in every channel (see the header comment;
+// the estimator's samples are never negative, so a zero mean means every sample was 0).
+bool noPathLeaves(const EvalPoint& point);
+
 struct EvalReport {
   EvalSampling sampling = EvalSampling::kArea;
   int samplesPerPoint = 0;
   int referenceBounces = 0;
   double meanRelStderr = 0.0;
   size_t indirectOnlyPoints = 0;  // points lit only indirectly (EvalPoint::indirectOnly)
+  size_t closedPoints = 0;        // points no path leaves (noPathLeaves), set by scoreMethod
+  double relFloor = 0.0;          // f of the header, W/m^2, set by scoreMethod
   double referenceSeconds = 0.0;
   std::vector<EvalPoint> points;
   std::vector<MethodResult> methods;
@@ -108,6 +134,9 @@ struct LookupMethod {
   // would call the method for consecutive pixels (the tet lookup passes each query's tet to the next).
   // Timing uses it when set.
   std::function<void(const glm::dvec3* world, const glm::vec3* normal, glm::vec3* out, size_t count)> batch;
+  // Optional: the all-occluded fallback's share in lookup's answer at (world, normal), in [0, 1]
+  // (ShadeRecord::fallback of the one shading function, runtime/shade.h). Unset: the method has none (n/a).
+  std::function<float(const glm::dvec3& world, const glm::vec3& normal)> fallback;
 };
 
 // What the tet lookup (ProbeQuery::irradiance and shaders/tetraprobe.glsl) reads, section by section, in the
@@ -164,12 +193,14 @@ EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
                           const std::vector<StoredReference>& stored);
 
 // Scores one method against the report's references and appends it to report.methods (name, bytes,
-// sections, probes, the error measures of the header and cpuNsPerQuery; the other timings stay 0).
+// sections, probes, the error measures of the header, fallback, closedMean and cpuNsPerQuery; the other
+// timings stay 0). Sets report.closedPoints and report.relFloor (from the points alone: the same for every
+// method).
 void scoreMethod(EvalReport& report, const LookupMethod& method);
 
 // The standard methods for a level: `tet` (ProbeQuery, with the level's stored occlusion when it has some),
 // `tet (no occlusion)` (only for a level storing occlusion: ProbeQuery with it disabled) and `nearest`
-// (nearest probe's SH). Bytes: tetLookupBytes for the tet methods; positions, SH and the bucket grid for
+// (nearest probe's SH). The tet methods report their fallback (ProbeQuery::explain); `nearest` has none. Bytes: tetLookupBytes for the tet methods; positions, SH and the bucket grid for
 // `nearest`.
 std::vector<LookupMethod> standardMethods(const Level& level);
 
@@ -182,8 +213,8 @@ LookupMethod gridMethod(std::shared_ptr<const GridVolume> grid, const std::strin
 // a level without occlusion. For diagnosing dark polygons.
 std::vector<float> fallbackShares(const Level& level, const EvalReport& report);
 
-// `tet+occlusion`: the tet lookup with per-tet occlusion data (runtime/occlusion.h) dropping occluded probes.
-// Points outside the tets (outer cells, empty level) take the plain tet answer.
+// `tet+occlusion`: the tet lookup with per-tet occlusion data (runtime/occlusion.h) dropping occluded probes,
+// with its fallback reported. Points outside the tets (outer cells, empty level) take the plain tet answer.
 LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion);
 
 }  // namespace tetraprobe
