@@ -47,14 +47,20 @@ inline void fixChecksums(Bytes& b) {
   tetraprobe::recomputeLevelChecksums(b.data(), b.size());
 }
 
-// Offset of the section with this tag (four ASCII characters), from the table.
-inline size_t section(const Bytes& b, const char* tag) {
+// Offset of the section with this tag (four ASCII characters), from the table; 0 when there is none.
+inline size_t findSection(const Bytes& b, const char* tag) {
   uint32_t t = 0;
   std::memcpy(&t, tag, 4);
   for (uint32_t i = 0; i < getU32(b, 72); ++i)
     if (getU32(b, 80 + 24 * size_t(i)) == t) return size_t(getU64(b, 80 + 24 * size_t(i) + 8));
-  ADD_FAILURE() << "the level has no " << tag << " section";
   return 0;
+}
+
+// Offset of the section with this tag, which the level must have.
+inline size_t section(const Bytes& b, const char* tag) {
+  const size_t at = findSection(b, tag);
+  if (at == 0) ADD_FAILURE() << "the level has no " << tag << " section";
+  return at;
 }
 
 }  // namespace tetraprobe::test

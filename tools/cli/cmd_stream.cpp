@@ -1,6 +1,8 @@
 // `tetraprobe stream LEVEL.tpb -o OUT.tpb`: adds the streaming index (section STRM: per-sector ranges and a
 // coarse probe set, tetra/stream_index.h) to a baked level, so an engine can load it sector by sector
-// (runtime/streaming.h, docs/streaming.md). The rest of the file is unchanged.
+// (runtime/streaming.h, docs/streaming.md). The cell grid and the probe kinds are left out (StreamingLevel reads
+// neither: each sector carries its cell's BSP in the index; loadLevel's ProbeQuery rebuilds the grid of a
+// streamed file); the other sections keep their bytes.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -17,17 +19,19 @@
 namespace tetraprobe::cli {
 
 int cmdStream(int argc, char** argv) {
-  Args args("tetraprobe stream LEVEL.tpb -o OUT.tpb [--coarse-spacing 8]",
-            "Adds a streaming index to a level: per sector (one 16 m cell of its cell grid) the tets that\n"
-            "touch it, their probes and the cell's BSP, and a coarse probe set (one probe per cube of\n"
-            "--coarse-spacing metres, tetrahedralized) that answers where no sector is loaded. Written\n"
-            "atomically; the level's other sections keep their bytes (docs/streaming.md).",
-            {{"--output", "-o", "OUT.tpb", "level file to write (may be LEVEL.tpb itself)", ""},
-             {"--coarse-spacing", "", "METRES", "coarse set: one probe per cube of this edge", "8"},
-             {"--measure", "", "",
-              "then open the written file as an engine would (StreamingLevel) and report the bytes it reads "
-              "to open, the memory in use idle and with each sector loaded alone",
-              ""}});
+  Args args(
+      "tetraprobe stream LEVEL.tpb -o OUT.tpb [--coarse-spacing 8]",
+      "Adds a streaming index to a level: per sector (one 16 m cell of its cell grid) the tets that\n"
+      "touch it, their probes and the cell's BSP, and a coarse probe set (one probe per cube of\n"
+      "--coarse-spacing metres, tetrahedralized) that answers where no sector is loaded. Written\n"
+      "atomically; the cell grid and probe kinds, which a streaming loader never reads, are left out; the\n"
+      "level's other sections keep their bytes (docs/streaming.md).",
+      {{"--output", "-o", "OUT.tpb", "level file to write (may be LEVEL.tpb itself)", ""},
+       {"--coarse-spacing", "", "METRES", "coarse set: one probe per cube of this edge", "8"},
+       {"--measure", "", "",
+        "then open the written file as an engine would (StreamingLevel) and report the bytes it reads "
+        "to open, the memory in use idle and with each sector loaded alone",
+        ""}});
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
   if (!args.has("--output")) throw UsageError("missing -o OUT.tpb");
@@ -38,14 +42,18 @@ int cmdStream(int argc, char** argv) {
   if (const LevelResult r = loadLevel(args.positional()[0], level); !r) throw InputError(r.message);
   StreamIndexStats stats;
   level.stream = buildStreamIndex(level, options, &stats);
+  const double cellSize = double(level.cellGrid.cellSize);
+  // Left out: every byte of a streamed file is one StreamingLevel reads and checks, so it refuses what
+  // loadLevel refuses (the sectors' BSP nodes are in the index; ProbeQuery rebuilds the grid for loadLevel).
+  level.cellGrid = CellGrid{};
+  level.probeKinds.clear();
   if (const LevelResult r = saveLevel(args.str("--output"), level); !r) throw std::runtime_error(r.message);
   std::printf(
       "tetraprobe stream: %s -> %s\n  sectors %zu of %g m: %zu tet and %zu probe references (%.2f and %.2f "
       "per tet and probe), %zu BSP nodes; largest sector %zu bytes\n  coarse  %zu probes at %g m, %zu tets\n"
       "  bytes   %zu (index)\n",
-      args.positional()[0].c_str(), args.str("--output").c_str(), stats.sectors,
-      double(level.cellGrid.cellSize), stats.tetRefs, stats.probeRefs,
-      level.tets.empty() ? 0.0 : double(stats.tetRefs) / double(level.tets.size()),
+      args.positional()[0].c_str(), args.str("--output").c_str(), stats.sectors, cellSize, stats.tetRefs,
+      stats.probeRefs, level.tets.empty() ? 0.0 : double(stats.tetRefs) / double(level.tets.size()),
       level.probes.empty() ? 0.0 : double(stats.probeRefs) / double(level.probes.size()), stats.nodes,
       stats.maxSectorBytes, stats.coarseProbes, stats.coarseSpacing, stats.coarseTets, stats.bytes);
   if (args.has("--measure")) {
