@@ -255,21 +255,34 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   EXPECT_EQ(section("start_grid"), query.startGrid().startTet.size() * 4);
 }
 
-// `tet+occlusion` (occlusionMethod, for a level without stored occlusion) answers what the `tet` lookup
-// answers once the level stores that occlusion, bit for bit: one shading (runtime/shade.h). Checked over a room
-// with a closet between the probes (points on its inner walls see none of their probes: the fallback) at
-// surface points and at volume points inside and outside the probes' hull.
-TEST(OcclusionMethod, IsTheTetLookupWithTheLevelStoringTheData) {
+// A 4 x 2.5 x 4 m room with a closed closet (a box with walls 1 cm thick) between the probes: points on the
+// closet's inner walls see none of their tet's probes (the fallback).
+Scene closetRoom() {
   Scene s;
   const uint32_t grey = test::addMaterial(s, glm::vec3(0.5f));
   test::addBox(s, {-2, 0, -2}, {2, 2.5f, 2}, /*inward=*/true, grey);
   test::addBox(s, {-0.25f, 0.4f, -0.25f}, {0.25f, 1.1f, 0.25f}, /*inward=*/false, grey);
   test::addBox(s, {-0.24f, 0.41f, -0.24f}, {0.24f, 1.09f, 0.24f}, /*inward=*/true, grey);
-  const SceneTracer tracer(s);
+  return s;
+}
+
+// A 6 x 3 x 6 lattice of probes filling closetRoom() around the closet.
+std::vector<glm::dvec3> closetRoomProbes() {
   std::vector<glm::dvec3> probes;
   for (double z : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7})
     for (double y : {0.3, 1.2, 2.2})
       for (double x : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7}) probes.push_back({x, y, z});
+  return probes;
+}
+
+// `tet+occlusion` (occlusionMethod, for a level without stored occlusion) answers what the `tet` lookup
+// answers once the level stores that occlusion, bit for bit: one shading (runtime/shade.h). Checked over a room
+// with a closet between the probes (points on its inner walls see none of their probes: the fallback) at
+// surface points and at volume points inside and outside the probes' hull.
+TEST(OcclusionMethod, IsTheTetLookupWithTheLevelStoringTheData) {
+  const Scene s = closetRoom();
+  const SceneTracer tracer(s);
+  const std::vector<glm::dvec3> probes = closetRoomProbes();
   Level plain = test::bakedLevel(tracer, probes, 1);
   std::mt19937_64 rng(7);  // the room is unlit: random light, so that every probe's weight shows
   std::uniform_real_distribution<float> u(-0.3f, 0.3f);
@@ -307,16 +320,9 @@ TEST(OcclusionMethod, IsTheTetLookupWithTheLevelStoringTheData) {
 // the closet see some. `tet`'s share is the count over the points of ShadeRecord::fallback > 0 (after the
 // face blend, not the own-data count), `tet (no occlusion)` never falls back and `nearest` has no fallback.
 TEST(StandardMethods, FallbackShareIsTheCountOverPoints) {
-  Scene s;
-  const uint32_t grey = test::addMaterial(s, glm::vec3(0.5f));
-  test::addBox(s, {-2, 0, -2}, {2, 2.5f, 2}, /*inward=*/true, grey);
-  test::addBox(s, {-0.25f, 0.4f, -0.25f}, {0.25f, 1.1f, 0.25f}, /*inward=*/false, grey);
-  test::addBox(s, {-0.24f, 0.41f, -0.24f}, {0.24f, 1.09f, 0.24f}, /*inward=*/true, grey);
+  const Scene s = closetRoom();
   const SceneTracer tracer(s);
-  std::vector<glm::dvec3> probes;
-  for (double z : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7})
-    for (double y : {0.3, 1.2, 2.2})
-      for (double x : {-1.7, -1.0, -0.3, 0.3, 1.0, 1.7}) probes.push_back({x, y, z});
+  const std::vector<glm::dvec3> probes = closetRoomProbes();
   Level level = test::bakedLevel(tracer, probes, 1);
   for (ShRgb& sh : level.sh) sh.c[0] = glm::vec3(1.0f);
   OcclusionOptions o;
