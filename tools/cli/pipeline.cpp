@@ -30,6 +30,11 @@ namespace tetraprobe::cli {
 
 namespace {
 
+// A shell lattice point within this many shell steps of a surface (by the clearance rays) keeps the fine
+// shell; the box's grown bounds put shell points half a step from a surface touching them, and two steps
+// keep a fine ring around whatever meets the bounds (a ground plane's edge, a roof near the top).
+constexpr double kShellNearSteps = 2.0;
+
 class StageTimer {
  public:
   explicit StageTimer(PipelineStats& stats) : stats_(stats) {}
@@ -173,7 +178,16 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
       }
-      for (const glm::dvec3& p : placeShellProbes(lo, hi, shellStep))
+      // Fine where a surface is within kShellNearSteps steps (or the point is inside geometry), at
+      // --max-spacing elsewhere: an open level's box top and sides over open ground hold nothing to light.
+      const double nearReach = kShellNearSteps * shellStep;
+      const NearGeometryQuery near = [&](const std::vector<glm::dvec3>& pts) {
+        const std::vector<Clearance> c = clearance(pts, std::vector<double>(pts.size(), nearReach));
+        std::vector<uint8_t> out(pts.size());
+        for (size_t i = 0; i < pts.size(); ++i) out[i] = c[i].inside || c[i].nearest <= nearReach;
+        return out;
+      };
+      for (const glm::dvec3& p : placeShellProbes(lo, hi, shellStep, options.maxSpacing, near))
         placed.add(p, ProbeKind::kShell, shellStep);
       stats.shellProbes = placed.count(ProbeKind::kShell);
     }

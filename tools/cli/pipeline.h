@@ -46,7 +46,8 @@ struct PipelineOptions {
   double maxSpacing = 10.0;    // voxel: coarsest open-space cell, metres
   double fillerSpacing = 4.0;  // voxel: open-space filler lattice, metres (0 = none)
   // voxel: shell probes (tetra/placement.h, placeShellProbes) on the level's bounds grown outward, at this
-  // step in metres; < 0 = auto (the spacing), 0 = none. Shell probes that fail the inside rule are dilated.
+  // step in metres within two steps of a surface, maxSpacing elsewhere; < 0 = auto (the spacing), 0 = none.
+  // Shell probes that fail the inside rule are dilated.
   double shellSpacing = -1.0;
   std::string tetra = "cgal";  // "cgal" | "tetgen"
 

@@ -65,7 +65,8 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--filler-spacing")},
       {"--shell-spacing", "", "auto|METRES",
        "voxel: shell probes on the level's bounds grown outward, so every surface lies inside a tet where "
-       "occlusion applies (docs/occlusion.md); auto = --spacing, 0 = none",
+       "occlusion applies (docs/occlusion.md): this step within 2 steps of a surface, --max-spacing elsewhere "
+       "(an open level's top and sides); auto = --spacing, 0 = none",
        def("--shell-spacing")},
       {"--tetra", "", "cgal|tetgen",
        "tetrahedralizer: CGAL Delaunay + circumcentre fillers at slivers, or TetGen Delaunay + quality "

@@ -94,6 +94,21 @@ bool triangleBoxOverlap(const glm::dvec3& a, const glm::dvec3& b, const glm::dve
 std::vector<glm::dvec3> placeShellProbes(const glm::dvec3& lo, const glm::dvec3& hi, double step,
                                          size_t maxProbes = 5'000'000);
 
+// Which of `points` lie near geometry (1) or far from it (0). Must be a pure function of its input.
+using NearGeometryQuery = std::function<std::vector<uint8_t>(const std::vector<glm::dvec3>& points)>;
+
+// The shell of placeShellProbes thinned where nothing needs it: a lattice point is kept when it lies on the
+// coarse sub-lattice (every k-th point along each axis, k = max(1, floor(farStep / step)), the last point
+// of each axis included) or when `nearGeometry` says it is near geometry. So the hull is still the whole
+// grown box (its corners and edges are on the coarse sub-lattice), surfaces near the bounds still lie in
+// tets with shell probes `step` apart, and the faces of an open level's box over open ground or sky (its
+// top and sides: most of the shell, nothing lit there that a camera sees) hold probes `farStep` apart.
+// farStep <= step, or no query, gives placeShellProbes' lattice. Deterministic order (z, then y, then x).
+// Throws as placeShellProbes does, and InputError for a non-finite farStep.
+std::vector<glm::dvec3> placeShellProbes(const glm::dvec3& lo, const glm::dvec3& hi, double step,
+                                         double farStep, const NearGeometryQuery& nearGeometry,
+                                         size_t maxProbes = 5'000'000);
+
 // ---- Rejection / push-out ---------------------------------------------------------------------------
 
 // What rays from a point see (computed by the caller, e.g. with the bake's SceneTracer; tetra links no
