@@ -14,6 +14,8 @@ PACKAGES=(
   libglm-dev libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the scale benchmark (bench/scale.py) and the sample generators (samples/*/make_*.py)
+  python3
   # fuzzing (make fuzz): clang 14 and its runtime libraries; libclang_rt.fuzzer is in libclang-rt-14-dev
   clang libclang-rt-14-dev
 )
