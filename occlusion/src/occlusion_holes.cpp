@@ -143,8 +143,9 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   OcclusionHoles out;
   if (level.occlusion.empty() || level.tets.empty()) return out;
   const double density = options.pointsPerSquareMetre / (options.spacing * options.spacing);
+  const int maxPoints = options.maxPoints > 0 ? std::min(options.maxPoints, kMaxHolePoints) : kMaxHolePoints;
   const double wanted = std::clamp(surfaceArea(tracer.scene()) * density, double(options.minPoints),
-                                   double(std::max(options.minPoints, options.maxPoints)));
+                                   double(std::max(options.minPoints, maxPoints)));
   const std::vector<SurfacePoint> points = sampleSurfacePoints(tracer, int(wanted), options.seed);
   out.pointsChecked = points.size();
 

@@ -546,6 +546,34 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   EXPECT_EQ(ij.at("tets").at("count"), j.at("tets").at("count"));
 }
 
+// Refinement's surface points grow with its probe budget (--refine-points auto): at least 2048, the budget
+// where that is more, so a level with sixteen times the budget selects from sixteen times the points; a
+// number given is used as is. The report and the generator string say which.
+TEST_F(Cli, RefinePointsGrowWithTheProbeBudget) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string base = "bake " + path("box.obj").string() +
+                           " --samples 16 --spacing 1 --max-samples 16 --path-budget 100000 --fill-holes 0";
+  auto refinePoints = [&](const std::string& extra) {
+    const CliRun r =
+        run(base + extra + " -o " + path("r.tpb").string() + " --report " + path("r.json").string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(path("r.json")));
+    return std::make_pair(j.at("refine").at("points").get<int>(), j.at("options").at("refine_points"));
+  };
+  const auto small = refinePoints(" --probe-budget 16");
+  EXPECT_EQ(small.first, 2048);
+  EXPECT_EQ(small.second, "auto");
+  const auto large = refinePoints(" --probe-budget 3000");
+  EXPECT_EQ(large.first, 3000);
+  const auto given = refinePoints(" --probe-budget 3000 --refine-points 300");
+  EXPECT_EQ(given.first, 300);
+  EXPECT_EQ(given.second, 300);
+  const CliRun insp = run("inspect " + path("r.tpb").string());
+  EXPECT_NE(insp.out.find("--refine-points=300"), std::string::npos) << insp.out;
+  EXPECT_EQ(run(base + " --refine-points 0 -o " + path("z.tpb").string()).code, 2);
+}
+
 // Query: below a ceiling light, a surface facing up (toward the light) receives much more than one facing
 // down, the batch form agrees with the single form line by line, and --explain's probes give the answer.
 TEST_F(Cli, QueryFacesTheLightAndBatchMatchesSingle) {

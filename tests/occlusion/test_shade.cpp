@@ -193,6 +193,31 @@ TEST(OcclusionHoles, CountsAreTheShadeRecordsFallbacks) {
   EXPECT_EQ(holes.lookupFallbackPoints, lookup);
 }
 
+// The hole finder checks a number of points proportional to the level's surface, with no upper bound by
+// default: twice the density gives twice the points, past the 50,000 the finder once stopped at (a town of
+// sixteen houses was checked as sparsely as 3,000 square metres).
+TEST(OcclusionHoles, PointCountGrowsWithTheSurfaceWithoutACap) {
+  const ClosetRoom room;
+  const SceneTracer tracer(room.scene);
+  OcclusionHoleOptions options;
+  options.spacing = 0.7;
+  options.propose = false;
+  options.minPoints = 1;  // the surface alone decides
+  options.pointsPerSquareMetre = 1.0;
+  const size_t small = findOcclusionHoles(tracer, room.level, options).pointsChecked;
+  ASSERT_GT(small, 0u);
+  // The density that asks for about 60,000 points, then twice that.
+  options.pointsPerSquareMetre = 60000.0 / double(small);
+  const size_t large = findOcclusionHoles(tracer, room.level, options).pointsChecked;
+  options.pointsPerSquareMetre *= 2.0;
+  const size_t twice = findOcclusionHoles(tracer, room.level, options).pointsChecked;
+  EXPECT_GT(large, 50000u);
+  EXPECT_NEAR(double(twice) / double(large), 2.0, 0.01);
+  // An explicit cap still holds.
+  options.maxPoints = 30000;
+  EXPECT_EQ(findOcclusionHoles(tracer, room.level, options).pointsChecked, 30000u);
+}
+
 // No tet (an empty level): the answer is 0 and the record keeps its defaults.
 TEST(Shade, NoTetAnswersZero) {
   const Level level;

@@ -284,6 +284,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                   {"bounds", {{sceneLo.x, sceneLo.y, sceneLo.z}, {sceneHi.x, sceneHi.y, sceneHi.z}}},
                   {"warnings", scene.warnings}};
     j["level"] = out;
+    const nlohmann::json refinePoints =
+        opt.refinePoints < 0 ? nlohmann::json("auto") : nlohmann::json(opt.refinePoints);
     j["options"] = {{"spacing", opt.spacing},
                     {"spacing_auto", spacingAuto},
                     {"bounces", opt.bake.bounces},
@@ -306,7 +308,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                     {"fill_holes", opt.holeRounds},
                     {"hole_rule", opt.holesOnlyUnseen ? "unseen" : "all"},
                     {"probe_budget", opt.probeBudget},
-                    {"refine_points", opt.refinePoints}};
+                    {"refine_points", refinePoints}};
     j["probes"] = {{"count", level.probes.size()},
                    {"grid", stats.gridProbes},
                    {"user", stats.userProbes},

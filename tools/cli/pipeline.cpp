@@ -423,13 +423,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   // auto: a quarter of the placed probes (shell probes not counted), at least kAutoRefineMin: a small level's
   // rooms hold few probes at the default spacing, and that is where 1 m probes resolve the light worst.
   constexpr int kAutoRefineMin = 256;
+  constexpr int kAutoRefinePointsMin = 2048;
   const int budget = options.probeBudget >= 0
                          ? options.probeBudget
                          : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));
   if (budget > 0 && baked) {
     RefineOptions ro;
     ro.spacing = options.spacing;
-    ro.points = options.refinePoints;
+    ro.points = options.refinePoints > 0 ? options.refinePoints : std::max(kAutoRefinePointsMin, budget);
     ro.content = options.bake.content;
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;

@@ -72,7 +72,10 @@ struct PipelineOptions {
   // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone
   // (placement "none") the CLI makes it 0 unless given (pipeline_options.h).
   int probeBudget = -1;
-  int refinePoints = 2048;
+  // Surface points refinement measures at (each twice: select, check); < 0 = auto: the probe budget, at
+  // least kAutoRefinePointsMin, so that the points grow with the level as its budget does (a level 16 times
+  // the size selects its 16 times the probes from 16 times the points, as a room does).
+  int refinePoints = -1;
   // How far in front of its surface point a refinement probe sits at most, metres; <= 0: auto, spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;

@@ -65,7 +65,8 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--filler-spacing")},
       {"--shell-spacing", "", "auto|METRES",
        "voxel: shell probes on the level's bounds grown outward, so every surface lies inside a tet where "
-       "occlusion applies (docs/occlusion.md): this step within 2 steps of a surface, --max-spacing elsewhere "
+       "occlusion applies (docs/occlusion.md): this step within 2 steps of a surface, --max-spacing "
+       "elsewhere "
        "(an open level's top and sides); auto = --spacing, 0 = none",
        def("--shell-spacing")},
       {"--tetra", "", "cgal|tetgen",
@@ -123,8 +124,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "the placed probes (shell probes not counted), at least 256; 0 = none (the default with --probes "
        "alone)",
        def("--probe-budget")},
-      {"--refine-points", "", "N",
-       "refinement: surface points the error is measured at (twice: select, check)", def("--refine-points")},
+      {"--refine-points", "", "N|auto",
+       "refinement: surface points the error is measured at (twice: select, check); auto = the probe "
+       "budget, at least 2048, so that a larger level is measured at as many points a probe as a room",
+       def("--refine-points")},
       {"--refine-offset", "", "auto|METRES",
        "refinement: how far in front of its surface point a new probe sits at most (half the free "
        "distance when less); auto = spacing / 8, close enough to see what the surface sees",
@@ -228,9 +231,10 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     if (!args.has("--fill-holes")) opt.holeRounds = 0;
     if (!args.has("--probe-budget")) opt.probeBudget = 0;
   }
-  opt.refinePoints = args.integer("--refine-points");
+  opt.refinePoints = args.str("--refine-points") == "auto" ? -1 : args.integer("--refine-points");
   if (opt.probeBudget < -1) throw UsageError("--probe-budget must be auto or >= 0");
-  if (opt.refinePoints < 1) throw UsageError("--refine-points must be >= 1");
+  if (opt.refinePoints == 0 || opt.refinePoints < -1)
+    throw UsageError("--refine-points must be auto or >= 1");
   if (args.str("--refine-offset") != "auto") {
     opt.refineOffset = args.number("--refine-offset");
     if (!(opt.refineOffset > 0.0) || !std::isfinite(opt.refineOffset))
@@ -272,7 +276,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--fill-holes", std::to_string(o.holeRounds));
   add("--hole-rule", o.holesOnlyUnseen ? "unseen" : "all");
   add("--probe-budget", o.probeBudget < 0 ? "auto" : std::to_string(o.probeBudget));
-  add("--refine-points", std::to_string(o.refinePoints));
+  add("--refine-points", o.refinePoints < 0 ? "auto" : std::to_string(o.refinePoints));
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");
   return v;
 }

@@ -22,7 +22,9 @@ struct OcclusionHoleOptions {
   double spacing = 1.0;  // probe spacing near geometry, metres: new probes sit at most spacing / 2 in
                          // front of their point, one per spacing / 2 cell
   double pointsPerSquareMetre = 4.0;  // surface points checked, per m^2 of surface x (1 m / spacing)^2
-  int minPoints = 4096, maxPoints = 50000;
+  // Bounds on that count. maxPoints 0: none (a level twice the surface is checked at twice the points, so
+  // a town gains from the rounds as a room does), up to kMaxHolePoints, which keeps the draw in memory.
+  int minPoints = 4096, maxPoints = 0;
   uint64_t seed = 0x401e5ull;  // surface points (sampleSurfacePoints)
   // Propose only for hole points whose fallback does not already answer with a probe they see: skipped are
   // points whose fallback probe (the one occludedIrradiance leans on: the largest u_i max(front_i,
@@ -31,6 +33,8 @@ struct OcclusionHoleOptions {
   bool onlyUnseen = false;
   bool propose = true;  // false: count the hole points only (the bake's check of the finished level)
 };
+
+inline constexpr int kMaxHolePoints = 1 << 25;  // 33.5 M points, about 1.3 GB of SurfacePoint
 
 struct OcclusionHoles {
   size_t pointsChecked = 0;  // surface points drawn (on their open side)
