@@ -212,6 +212,21 @@ def markdown(rows, fit_from, extra):
     else:
         lines.append(f"Exponents: fewer than two levels of {fit_from} copies or more; none fitted.")
     lines.append(f"Bake options: defaults{(' + ' + ' '.join(extra)) if extra else ''}.")
+    lines += ["", "What hole filling and refinement did on each level (the bake's own figures: hole points are "
+              "surface points whose tet's data hides all four probes; refinement's error is the mean |log2| of "
+              "the lookup against the oracle at independent surface points, before and after its probes):", "",
+              "| copies | hole points checked (round 1) | hole points (round 1) | hole probes | refine points | "
+              "refine probes | refine mean abs log2, before -> after | reduction |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        rounds = r.get("holes", {}).get("rounds", [])
+        first = rounds[0] if rounds else {}
+        ref = r.get("refine", {})
+        before, after = ref.get("mean_log2_error_before"), ref.get("mean_log2_error_after")
+        change = f"{(before - after) / before * 100:.0f} %" if before and after is not None else "n/a"
+        fig = f"{before:.4f} -> {after:.4f}" if before is not None and after is not None else "n/a"
+        lines.append(f"| {r['copies']} | {first.get('points_checked', 0):,} | {first.get('hole_points', 0):,} | "
+                     f"{r.get('holes', {}).get('probes_added', 0):,} | {ref.get('points', 0):,} | "
+                     f"{ref.get('probes_added', 0):,} | {fig} | {change} |")
     return "\n".join(lines) + "\n"
 
 
