@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -381,7 +382,66 @@ TetResult processTet(const Context& ctx, size_t index, std::vector<uint32_t>& sc
   return r;
 }
 
+using TetKey = std::array<int32_t, 4>;
+
+TetKey tetKey(const Tet& t) {
+  return {t.v[0], t.v[1], t.v[2], t.v[3]};
+}
+
 }  // namespace
+
+struct OcclusionCache::Impl {
+  // What the results were computed for.
+  const SceneTracer* tracer = nullptr;
+  glm::dvec3 origin{0.0};
+  OcclusionMode mode = OcclusionMode::kNone;
+  double minAgreement = 0.0;
+  int volumeSamples = 0, surfaceSamples = 0;
+  std::vector<glm::vec3> probes;  // the previous call's level.probes
+  std::vector<uint32_t> sources;  // and visibility sources (i where none was given)
+  // The previous call's tets, sorted by key: those with geometry with their result, the others (whose
+  // result is TetResult{}) by key alone.
+  std::vector<std::pair<TetKey, TetResult>> withGeometry;
+  std::vector<TetKey> without;
+  size_t reused = 0, computed = 0;
+
+  // Whether results computed for the stored state hold for this call.
+  bool validFor(const SceneTracer& t, const Level& level, const OcclusionOptions& o) const {
+    if (tracer != &t || origin != level.origin || mode != o.mode || minAgreement != o.minAgreement ||
+        volumeSamples != o.volumeSamples || surfaceSamples != o.surfaceSamples ||
+        probes.size() > level.probes.size())
+      return false;
+    for (size_t i = 0; i < probes.size(); ++i) {
+      const uint32_t src = o.visibilitySource.empty() ? uint32_t(i) : o.visibilitySource[i];
+      if (std::memcmp(&probes[i], &level.probes[i], sizeof(glm::vec3)) != 0 || sources[i] != src)
+        return false;
+    }
+    return true;
+  }
+
+  // The stored result of a tet with these four probes, or null.
+  const TetResult* find(const TetKey& key, bool& found) const {
+    found = false;
+    auto it =
+        std::lower_bound(withGeometry.begin(), withGeometry.end(), key,
+                         [](const std::pair<TetKey, TetResult>& e, const TetKey& k) { return e.first < k; });
+    if (it != withGeometry.end() && it->first == key) {
+      found = true;
+      return &it->second;
+    }
+    found = std::binary_search(without.begin(), without.end(), key);
+    return nullptr;
+  }
+};
+
+OcclusionCache::OcclusionCache() : impl_(std::make_unique<Impl>()) {}
+OcclusionCache::~OcclusionCache() = default;
+size_t OcclusionCache::reused() const {
+  return impl_->reused;
+}
+size_t OcclusionCache::computed() const {
+  return impl_->computed;
+}
 
 bool parseOcclusionMode(const std::string& text, OcclusionMode& mode) {
   for (OcclusionMode m :
@@ -408,7 +468,7 @@ const char* occlusionModeName(OcclusionMode mode) {
 }
 
 LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, const OcclusionOptions& options,
-                              OcclusionStats* stats) {
+                              OcclusionStats* stats, OcclusionCache* cache) {
   const auto start = std::chrono::steady_clock::now();
   if (const LevelResult check = validateLevel(level); !check)
     throw InputError("occlusion: invalid level: " + check.message);
@@ -448,11 +508,24 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
   ctx.grid = std::make_unique<TriangleGrid>(scene, ctx.local, lo, hi);
 
   std::vector<TetResult> results(level.tets.size());
+  OcclusionCache::Impl* reuse = cache ? cache->impl_.get() : nullptr;
+  const bool cacheValid = reuse && reuse->validFor(tracer, level, options);
+  std::vector<uint8_t> wasReused(level.tets.size(), 0);
   std::unique_ptr<Progress> progress;
   if (options.progress) progress = std::make_unique<Progress>("occlusion", level.tets.size(), "tets");
   parallelFor(
       level.tets.size(), options.threads,
       [&](size_t t) {
+        if (cacheValid) {
+          bool found = false;
+          const TetResult* earlier = reuse->find(tetKey(level.tets[t]), found);
+          if (found) {
+            results[t] = earlier ? *earlier : TetResult{};
+            wasReused[t] = 1;
+            if (progress) progress->advance();
+            return;
+          }
+        }
         thread_local std::vector<uint32_t> scratch;
         FlushDenormalsScope denormals;
         results[t] = processTet(ctx, t, scratch);
@@ -460,6 +533,32 @@ LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, con
       },
       16);
   if (progress) progress->finish();
+  if (reuse) {
+    // Keep this call's tets for the next one.
+    reuse->reused = size_t(std::count(wasReused.begin(), wasReused.end(), uint8_t(1)));
+    reuse->computed = level.tets.size() - reuse->reused;
+    reuse->tracer = &tracer;
+    reuse->origin = level.origin;
+    reuse->mode = options.mode;
+    reuse->minAgreement = options.minAgreement;
+    reuse->volumeSamples = options.volumeSamples;
+    reuse->surfaceSamples = options.surfaceSamples;
+    reuse->probes = level.probes;
+    reuse->sources.resize(level.probes.size());
+    for (size_t i = 0; i < level.probes.size(); ++i)
+      reuse->sources[i] = options.visibilitySource.empty() ? uint32_t(i) : options.visibilitySource[i];
+    reuse->withGeometry.clear();
+    reuse->without.clear();
+    for (size_t t = 0; t < level.tets.size(); ++t) {
+      if (results[t].hasGeometry)
+        reuse->withGeometry.emplace_back(tetKey(level.tets[t]), results[t]);
+      else
+        reuse->without.push_back(tetKey(level.tets[t]));
+    }
+    std::sort(reuse->withGeometry.begin(), reuse->withGeometry.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::sort(reuse->without.begin(), reuse->without.end());
+  }
 
   // Sequential pass: offsets in tet order, so the arrays are the same for any thread count.
   out.tets.resize(level.tets.size());

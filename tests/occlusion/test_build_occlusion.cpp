@@ -2,6 +2,7 @@
 // cross-checked against rays at points on both sides.
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 
@@ -353,6 +354,73 @@ TEST(Occlusion, TwoRoomsDarkSideIgnoresLitProbes) {
   std::printf("[two rooms] %d dark-side points: largest lit-probe weight %.3f without occlusion, %.4f with\n",
               points, maxLeakBefore, maxLeakAfter);
   EXPECT_GE(maxLeakBefore, 0.3);  // the case is meaningful: without occlusion, light leaks
+}
+
+// Bytes of the occlusion arrays and the stats that describe them, for equality.
+bool sameOcclusion(const LevelOcclusion& a, const LevelOcclusion& b) {
+  if (a.tets.size() != b.tets.size() || a.planes.size() != b.planes.size() || a.shadowMaps != b.shadowMaps)
+    return false;
+  return std::memcmp(a.tets.data(), b.tets.data(), a.tets.size() * sizeof(TetOcclusion)) == 0 &&
+         std::memcmp(a.planes.data(), b.planes.data(), a.planes.size() * sizeof(OcclusionPlane)) == 0;
+}
+bool sameStats(const OcclusionStats& a, const OcclusionStats& b) {
+  return a.tets == b.tets && a.tetsWithGeometry == b.tetsWithGeometry && a.none == b.none &&
+         a.planeTets == b.planeTets && a.shadowMapTets == b.shadowMapTets && a.planes == b.planes &&
+         a.bytes == b.bytes && a.belowMinAgreement == b.belowMinAgreement && a.answers == b.answers &&
+         a.agreeing == b.agreeing && a.leaking == b.leaking && a.blackouts == b.blackouts &&
+         a.rays == b.rays && a.surfaceAnswers == b.surfaceAnswers && a.surfaceAgreeing == b.surfaceAgreeing;
+}
+
+// A level grown by appended probes (what the bake's hole and refinement rounds do) gets the same occlusion
+// data and stats, bit for bit, with the cache of the previous call as without it; the tets the new probes
+// left alone are reused, the others worked out. A moved probe or other options invalidate the cache.
+TEST(OcclusionCache, GrownLevelGetsTheSameDataAsAFreshBuild) {
+  const TwoRooms rooms;
+  const SceneTracer tracer(rooms.scene);
+  std::vector<glm::dvec3> probes;
+  for (const glm::vec3& p : rooms.level.probes) probes.push_back(glm::dvec3(p));
+  for (int shapes = 0; shapes < 2; ++shapes) {
+    OcclusionOptions options = quiet(shapes == 0 ? OcclusionMode::kAuto : OcclusionMode::kShadowMaps);
+    OcclusionCache cache;
+    OcclusionStats first;
+    buildOcclusion(tracer, rooms.level, options, &first, &cache);
+    EXPECT_EQ(cache.reused(), 0u);
+    EXPECT_EQ(cache.computed(), rooms.level.tets.size());
+
+    std::vector<glm::dvec3> grown = probes;
+    for (const glm::dvec3& p : {glm::dvec3(-0.15, 1.0, 1.3), glm::dvec3(0.15, 1.9, -1.4),
+                                glm::dvec3(-1.3, 0.6, 0.0), glm::dvec3(1.35, 2.0, 1.45)})
+      grown.push_back(p);
+    const Level bigger = test::makeLevel(grown);
+    OcclusionStats cached, fresh;
+    const LevelOcclusion a = buildOcclusion(tracer, bigger, options, &cached, &cache);
+    const LevelOcclusion b = buildOcclusion(tracer, bigger, options, &fresh, nullptr);
+    EXPECT_TRUE(sameOcclusion(a, b)) << "mode " << shapes;
+    EXPECT_TRUE(sameStats(cached, fresh)) << "mode " << shapes;
+    EXPECT_GT(cache.reused(), bigger.tets.size() / 2) << "most tets are untouched by four new probes";
+    EXPECT_GT(cache.computed(), 0u);
+    EXPECT_EQ(cache.reused() + cache.computed(), bigger.tets.size());
+
+    // The same level again: everything reused.
+    buildOcclusion(tracer, bigger, options, nullptr, &cache);
+    EXPECT_EQ(cache.reused(), bigger.tets.size());
+
+    // A probe moved (not appended): nothing reused, and the answer is the fresh one.
+    std::vector<glm::dvec3> moved = grown;
+    moved[7].y += 0.05;
+    const Level shifted = test::makeLevel(moved);
+    OcclusionStats movedStats, movedFresh;
+    const LevelOcclusion c = buildOcclusion(tracer, shifted, options, &movedStats, &cache);
+    EXPECT_EQ(cache.reused(), 0u);
+    EXPECT_TRUE(sameOcclusion(c, buildOcclusion(tracer, shifted, options, &movedFresh, nullptr)));
+    EXPECT_TRUE(sameStats(movedStats, movedFresh));
+
+    // Other options: nothing reused.
+    OcclusionOptions stricter = options;
+    stricter.minAgreement = 0.999;
+    buildOcclusion(tracer, shifted, stricter, nullptr, &cache);
+    EXPECT_EQ(cache.reused(), 0u);
+  }
 }
 
 // Near the door, light comes through: points in the doorway on the dark side still see lit probes.

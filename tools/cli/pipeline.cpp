@@ -345,6 +345,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   timer.mark("dering");
   stage.reset();  // occlusion has progress of its own
 
+  // The hole and refinement rounds grow the level; the tets they leave as they were keep their data.
+  OcclusionCache occlusionCache;
   auto occlude = [&] {
     OcclusionOptions occ = options.occlusion;
     occ.threads = options.bake.threads;
@@ -355,7 +357,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       occ.visibilitySource[i] = uint32_t(i);
     stats.occlusion = OcclusionStats{};
     level.occlusion = LevelOcclusion{};
-    level.occlusion = buildOcclusion(tracer, level, occ, &stats.occlusion);
+    level.occlusion = buildOcclusion(tracer, level, occ, &stats.occlusion, &occlusionCache);
   };
   if (options.occlusion.mode != OcclusionMode::kNone) {
     occlude();

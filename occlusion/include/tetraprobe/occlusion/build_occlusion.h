@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -85,7 +86,35 @@ struct OcclusionStats {
 // The result is empty (nothing stored) when no tet needs data or mode is kNone. Throws InputError for an
 // invalid level (validateLevel), minAgreement outside [0, 1], negative sample counts, or more data than the
 // 28-bit offsets address.
+//
+// `cache` (optional, see OcclusionCache): per-tet results of the previous call with the same cache, reused for
+// the tets that call had; the result and stats are then the same, bit for bit, as without a cache.
+class OcclusionCache;
 LevelOcclusion buildOcclusion(const SceneTracer& tracer, const Level& level, const OcclusionOptions& options,
-                              OcclusionStats* stats = nullptr);
+                              OcclusionStats* stats = nullptr, OcclusionCache* cache = nullptr);
+
+// What buildOcclusion worked out per tet, kept for the next call on a grown level (the bake's hole and
+// refinement rounds append probes and tetrahedralize again; most tets come back unchanged, with the same four
+// probes in the same canonical order). A tet's result depends only on its four probes' positions and
+// visibility sources, the geometry and the options, so a tet whose four probe indices match a tet of the
+// previous call is not worked out again. The cache checks that it may: it is cleared when the level's
+// probes are not the previous call's with probes appended (a position or a visibility source changed), or
+// when the tracer, the level's origin or the options that decide a tet's data differ. After each call it
+// holds that call's tets only (memory: the level's tets with geometry, about 150 bytes each).
+class OcclusionCache {
+ public:
+  OcclusionCache();
+  ~OcclusionCache();
+  OcclusionCache(const OcclusionCache&) = delete;
+  OcclusionCache& operator=(const OcclusionCache&) = delete;
+  size_t reused() const;    // tets the last call took from the cache
+  size_t computed() const;  // tets the last call worked out
+
+ private:
+  friend LevelOcclusion buildOcclusion(const SceneTracer&, const Level&, const OcclusionOptions&,
+                                       OcclusionStats*, OcclusionCache*);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace tetraprobe
