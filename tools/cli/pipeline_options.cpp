@@ -65,7 +65,8 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--filler-spacing")},
       {"--shell-spacing", "", "auto|METRES",
        "voxel: shell probes on the level's bounds grown outward, so every surface lies inside a tet where "
-       "occlusion applies (docs/occlusion.md): this step within 2 steps of a surface, --max-spacing elsewhere "
+       "occlusion applies (docs/occlusion.md): this step within 2 steps of a surface, --max-spacing "
+       "elsewhere "
        "(an open level's top and sides); auto = --spacing, 0 = none",
        def("--shell-spacing")},
       {"--tetra", "", "cgal|tetgen",
@@ -129,6 +130,15 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "refinement: how far in front of its surface point a new probe sits at most (half the free "
        "distance when less); auto = spacing / 8, close enough to see what the surface sees",
        def("--refine-offset")},
+      {"--late-slivers", "", "fix|keep",
+       "after hole and refinement probes: fix = bring the final mesh's worst tet back to the worst before "
+       "them (late fillers, then the late probe of each sliver left is dropped; docs/occlusion.md); keep = "
+       "leave their slivers",
+       def("--late-slivers")},
+      {"--late-fillers", "", "N",
+       "late sliver pass: filler probes it may add (each baked like a refinement probe) before it drops "
+       "late probes",
+       def("--late-fillers")},
       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)",
        std::to_string(PipelineOptions{}.bake.threads)},
       {"--shard", "", "I/N",
@@ -236,6 +246,11 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     if (!(opt.refineOffset > 0.0) || !std::isfinite(opt.refineOffset))
       throw UsageError("--refine-offset must be auto or a positive number of metres");
   }
+  if (args.str("--late-slivers") != "fix" && args.str("--late-slivers") != "keep")
+    throw UsageError("--late-slivers must be fix or keep, not '" + args.str("--late-slivers") + "'");
+  opt.lateSlivers = args.str("--late-slivers") == "fix";
+  opt.lateFillers = args.integer("--late-fillers");
+  if (opt.lateFillers < 0) throw UsageError("--late-fillers must be >= 0");
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
@@ -274,6 +289,8 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--probe-budget", o.probeBudget < 0 ? "auto" : std::to_string(o.probeBudget));
   add("--refine-points", std::to_string(o.refinePoints));
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");
+  add("--late-slivers", o.lateSlivers ? "fix" : "keep");
+  add("--late-fillers", std::to_string(o.lateFillers));
   return v;
 }
 
