@@ -9,6 +9,7 @@
 #include "tetraprobe/tetra/final_slivers.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -123,23 +124,34 @@ FinalSliverResult fixFinalSlivers(
     r.fillerRounds = round + 1;
   }
 
-  // (2) Remove the late corner of every sliver left, until none is left or none has a late corner.
+  // (2) Remove late corners of the slivers left, until none is left or none has a late corner. Per round a
+  // greedy cover: the removable corner of the most slivers goes first (ties: the one added last), and a
+  // sliver one of whose corners goes is covered.
   for (;;) {
     std::vector<uint8_t> drop(pos.size(), 0);
     size_t dropped = 0;
-    for (const auto& t : r.mesh.tets) {
-      if (!(tetMinDihedral(pos, t) < target)) continue;
-      // The removable corner added last: fillers (appended after every given point) first, then the
-      // highest-index late probe.
-      int64_t best = -1;
-      for (int k = 0; k < 4; ++k) {
-        const size_t v = size_t(t[size_t(k)]);
-        const bool removable = from[v] < 0 || size_t(from[v]) >= options.firstLate;
-        if (removable && int64_t(v) > best) best = int64_t(v);
-      }
-      if (best >= 0 && !drop[size_t(best)]) {
-        drop[size_t(best)] = 1;
-        ++dropped;
+    std::vector<std::array<int32_t, 4>> slivers;
+    for (const auto& t : r.mesh.tets)
+      if (tetMinDihedral(pos, t) < target) slivers.push_back(t);
+    auto removable = [&](size_t v) { return from[v] < 0 || size_t(from[v]) >= options.firstLate; };
+    std::vector<uint32_t> count(pos.size(), 0);
+    for (const auto& t : slivers)
+      for (int k = 0; k < 4; ++k)
+        if (removable(size_t(t[size_t(k)]))) ++count[size_t(t[size_t(k)])];
+    std::vector<uint8_t> covered(slivers.size(), 0);
+    for (;;) {
+      size_t best = pos.size();
+      for (size_t v = 0; v < pos.size(); ++v)
+        if (count[v] > 0 && (best == pos.size() || count[v] >= count[best])) best = v;
+      if (best == pos.size()) break;
+      drop[best] = 1;
+      ++dropped;
+      for (size_t s = 0; s < slivers.size(); ++s) {
+        const auto& t = slivers[s];
+        if (covered[s] || std::find(t.begin(), t.end(), int32_t(best)) == t.end()) continue;
+        covered[s] = 1;
+        for (int k = 0; k < 4; ++k)
+          if (removable(size_t(t[size_t(k)]))) --count[size_t(t[size_t(k)])];
       }
     }
     if (dropped == 0) break;

@@ -103,6 +103,43 @@ void tetsBelowDeg(const std::vector<glm::dvec3>& points, const TetMesh& mesh, st
   }
 }
 
+// The worst tet of `mesh` by min dihedral: its angle, whether a face is on the hull, its volume and its
+// probes' kinds, e.g. "0.000 deg, hull, 1.2e-17 m^3, shell shell shell surface".
+std::string describeWorstTet(const std::vector<glm::dvec3>& points, const TetMesh& mesh,
+                             const std::vector<LevelProbeKind>& kinds) {
+  static const char* const kNames[kLevelProbeKindCount] = {
+      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
+  size_t worst = mesh.tets.size();
+  double angle = 180.0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const auto& v = mesh.tets[t];
+    const double d =
+        tetQuality(points[size_t(v[0])], points[size_t(v[1])], points[size_t(v[2])], points[size_t(v[3])])
+            .minDihedralDeg;
+    if (d < angle) {
+      angle = d;
+      worst = t;
+    }
+  }
+  if (worst == mesh.tets.size()) return "";
+  const auto& v = mesh.tets[worst];
+  const auto& nb = mesh.neighbours[worst];
+  const glm::dvec3 p0 = points[size_t(v[0])];
+  const double volume =
+      glm::dot(points[size_t(v[1])] - p0, glm::cross(points[size_t(v[2])] - p0, points[size_t(v[3])] - p0)) /
+      6.0;
+  std::ostringstream out;
+  out.precision(3);
+  out << angle << " deg, " << (std::find(nb.begin(), nb.end(), -1) != nb.end() ? "hull" : "interior") << ", "
+      << volume << " m^3,";
+  for (int k = 0; k < 4; ++k) {
+    const size_t i = size_t(v[size_t(k)]);
+    out << ' '
+        << (i < kinds.size() && uint8_t(kinds[i]) < kLevelProbeKindCount ? kNames[uint8_t(kinds[i])] : "?");
+  }
+  return out.str();
+}
+
 }  // namespace
 
 double sceneLargestExtent(const Scene& scene) {
@@ -276,6 +313,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   const size_t firstLate = probes.size();
   spacing.resize(probes.size(), options.spacing);
   tetsBelowDeg(probes, mesh, stats.tetsBelow);
+  stats.worstTet = stats.worstTetBeforeHoles = describeWorstTet(probes, mesh, kinds);
   timer.mark("tetrahedralize");
   stage.emplace("cell grid", 0, "", show);
 
@@ -394,6 +432,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.minDihedral = q.worstMinDihedralDeg;
     stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
     tetsBelowDeg(probes, grown, stats.tetsBelow);
+    stats.worstTet = describeWorstTet(probes, grown, kinds);
     stage.emplace("cell grid", 0, "", show);
     level.tets = buildTetRecords(probes, grown, level.origin);
     level.outerCells = buildOuterCells(level.probes, level.tets);
@@ -460,6 +499,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       stats.dihedralHistogramBeforeLate.assign(r.before.minDihedralHistogram.begin(),
                                                r.before.minDihedralHistogram.end());
       stats.tetsBelowBeforeLate = stats.tetsBelow;
+      stats.worstTetBeforeLate = stats.worstTet;
       stats.lateRemoved = r.removed.size();
       stats.lateFillers = r.added.size();
       if (!r.removed.empty()) {
@@ -495,6 +535,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       stats.minDihedralBeforeLate = stats.minDihedral;
       stats.dihedralHistogramBeforeLate = stats.dihedralHistogram;
       stats.tetsBelowBeforeLate = stats.tetsBelow;
+      stats.worstTetBeforeLate = stats.worstTet;
     }
     if (occlusionStale && options.occlusion.mode != OcclusionMode::kNone) {
       occlude();

@@ -121,6 +121,9 @@ struct PipelineStats {
   double minDihedralBeforeHoles = 0.0, minDihedralBeforeLate = 0.0;
   std::vector<uint64_t> dihedralHistogramBeforeLate;
   std::array<size_t, 3> tetsBelowBeforeLate{};
+  // The worst tet of the final mesh, before hole and refinement probes and before the late pass: angle,
+  // hull or interior, volume and its probes' kinds (why it is flat).
+  std::string worstTet, worstTetBeforeHoles, worstTetBeforeLate;
   bool latePass = false;  // the late pass ran (probes were added after the fillers)
   size_t lateFillers = 0, lateRemoved = 0, lateRemovedHole = 0, lateRemovedRefinement = 0;
 

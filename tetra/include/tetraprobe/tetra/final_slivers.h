@@ -42,9 +42,10 @@ struct FinalSliverResult {
 // mean corner spacing (`spacing`, one per point, metres), filtered as addSliverFillers does (merge tolerance
 // minDistance x spacing, then `inside`, which may be empty), at most maxFillers in all, in tet order; a round
 // is kept only when it lowers the number of tets below targetDeg, else undone and the loop ends. (2) While a
-// tet is below targetDeg: each such tet's highest-index removable corner (a late probe or a filler of step
-// 1) is removed, all at once, and the points tetrahedralized again; ends when no tet is below targetDeg or
-// none of them has a removable corner. With CGAL's Delaunay (symbolic perturbation) every tet whose corners
+// tet is below targetDeg: removable corners (late probes and fillers of step 1) of those tets are removed, a
+// greedy cover (the corner of the most such tets first, ties to the highest index, until each such tet with
+// a removable corner lost one), and the points tetrahedralized again; ends when no tet is below targetDeg
+// or none of them has a removable corner. With CGAL's Delaunay (symbolic perturbation) every tet whose corners
 // are all earlier points is a tet of the earlier points' own Delaunay mesh, so when targetDeg is that
 // mesh's worst min dihedral, step 2 always reaches it: after.worstMinDihedralDeg >= targetDeg. Deterministic
 // (sequential, the same input gives the same result). Throws what the tetrahedralizers throw.
