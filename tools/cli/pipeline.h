@@ -80,6 +80,7 @@ struct PipelineOptions {
   // stay.
   bool lateSlivers = true;
   int lateFillers = 0;
+  double lateMinDihedral = -1.0;  // the pass's bound, degrees; < 0 = auto (the worst before those probes)
   // How far in front of its surface point a refinement probe sits at most, metres; <= 0: auto, spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;

@@ -139,6 +139,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "late sliver pass: filler probes it may add (each baked like a refinement probe) before it drops "
        "late probes",
        def("--late-fillers")},
+      {"--late-min-dihedral", "", "auto|DEG",
+       "late sliver pass: the min dihedral it brings the final mesh's tets to; auto = the worst tet's before "
+       "hole and refinement probes (a lower bound drops fewer late probes)",
+       def("--late-min-dihedral")},
       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)",
        std::to_string(PipelineOptions{}.bake.threads)},
       {"--shard", "", "I/N",
@@ -250,6 +254,11 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     throw UsageError("--late-slivers must be fix or keep, not '" + args.str("--late-slivers") + "'");
   opt.lateSlivers = args.str("--late-slivers") == "fix";
   opt.lateFillers = args.integer("--late-fillers");
+  if (args.str("--late-min-dihedral") != "auto") {
+    opt.lateMinDihedral = args.number("--late-min-dihedral");
+    if (!(opt.lateMinDihedral >= 0.0 && opt.lateMinDihedral < 70.0))
+      throw UsageError("--late-min-dihedral must be auto or a number of degrees in [0, 70)");
+  }
   if (opt.lateFillers < 0) throw UsageError("--late-fillers must be >= 0");
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
@@ -291,6 +300,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");
   add("--late-slivers", o.lateSlivers ? "fix" : "keep");
   add("--late-fillers", std::to_string(o.lateFillers));
+  add("--late-min-dihedral", o.lateMinDihedral < 0.0 ? "auto" : exactNumber(o.lateMinDihedral));
   return v;
 }
 
