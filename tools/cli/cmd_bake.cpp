@@ -213,10 +213,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       stats.tetsBelow[2], stats.minDihedralBeforeFiller, stats.minDihedralBeforeHoles);
   if (stats.latePass)
     std::printf(
-        "  late    slivers after hole and refinement probes: worst %.3g -> %.3g deg, under 1 / 5 / 10 deg "
+        "  late    slivers after hole and refinement probes (bound %.3g deg): worst %.3g -> %.3g deg, under "
+        "1 / 5 / 10 deg "
         "%zu / %zu / %zu -> %zu / %zu / %zu; %zu fillers added, %zu late probes dropped (%zu hole, %zu "
         "refinement)\n",
-        stats.minDihedralBeforeLate, stats.minDihedral, stats.tetsBelowBeforeLate[0],
+        stats.lateTargetDeg, stats.minDihedralBeforeLate, stats.minDihedral, stats.tetsBelowBeforeLate[0],
         stats.tetsBelowBeforeLate[1], stats.tetsBelowBeforeLate[2], stats.tetsBelow[0], stats.tetsBelow[1],
         stats.tetsBelow[2], stats.lateFillers, stats.lateRemoved, stats.lateRemovedHole,
         stats.lateRemovedRefinement);
@@ -344,6 +345,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         {"late_pass",
          {{"ran", stats.latePass},
           {"min_dihedral_deg_before", stats.minDihedralBeforeLate},
+          {"bound_deg", stats.lateTargetDeg},
           {"quality_histogram_before", {{"bin_deg", 5}, {"min_dihedral", stats.dihedralHistogramBeforeLate}}},
           {"below_1_5_10_deg_before", stats.tetsBelowBeforeLate},
           {"worst_tet_before", stats.worstTetBeforeLate},

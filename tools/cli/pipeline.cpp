@@ -483,7 +483,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       stats.latePass = true;
       FinalSliverOptions fo;
       fo.backend = options.tetra == "tetgen" ? TetraBackend::kTetGen : TetraBackend::kCgal;
-      fo.targetDeg = options.lateMinDihedral < 0.0 ? stats.minDihedralBeforeHoles : options.lateMinDihedral;
+      fo.targetDeg = options.lateMinDihedral < 0.0
+                         ? stats.minDihedralBeforeHoles
+                         : std::min(options.lateMinDihedral, stats.minDihedralBeforeHoles);
+      stats.lateTargetDeg = fo.targetDeg;
       fo.firstLate = firstLate;
       fo.maxFillers = size_t(std::max(0, options.lateFillers));
       const ClearanceQuery clearance = tracerClearance(tracer, options.bake.threads);

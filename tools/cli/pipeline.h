@@ -75,12 +75,15 @@ struct PipelineOptions {
   int probeBudget = -1;
   int refinePoints = 2048;
   // The late sliver pass (tetra/final_slivers.h) after hole and refinement probes: brings the worst tet of the
-  // final mesh back to the worst before those probes, with at most lateFillers filler probes (baked like the
+  // final mesh back to the worst before those probes (or lateMinDihedral when lower), with at most lateFillers filler probes (baked like the
   // other added probes) and then by removing the late probe of each sliver left. Off: the late probes' slivers
   // stay.
   bool lateSlivers = true;
   int lateFillers = 0;
-  double lateMinDihedral = -1.0;  // the pass's bound, degrees; < 0 = auto (the worst before those probes)
+  // The pass's bound, degrees: the smaller of this and the worst tet's before those probes; < 0 = auto (the
+  // worst before those probes, whatever it is). 2 by default: on Veach Ajar (14.6 deg before) and the Cornell
+  // box (7.2) the auto bound drops most hole and refinement probes and their accuracy with them.
+  double lateMinDihedral = 2.0;
   // How far in front of its surface point a refinement probe sits at most, metres; <= 0: auto, spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;
@@ -125,7 +128,9 @@ struct PipelineStats {
   // The worst tet of the final mesh, before hole and refinement probes and before the late pass: angle,
   // hull or interior, volume and its probes' kinds (why it is flat).
   std::string worstTet, worstTetBeforeHoles, worstTetBeforeLate;
-  bool latePass = false;  // the late pass ran (probes were added after the fillers)
+  bool latePass = false;
+  double lateTargetDeg =
+      0.0;  // the bound it worked to  // the late pass ran (probes were added after the fillers)
   size_t lateFillers = 0, lateRemoved = 0, lateRemovedHole = 0, lateRemovedRefinement = 0;
 
   // Occlusion-hole filling, per round: surface points checked, points seeing none of their probes, probes

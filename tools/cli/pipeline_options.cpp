@@ -140,8 +140,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "late probes",
        def("--late-fillers")},
       {"--late-min-dihedral", "", "auto|DEG",
-       "late sliver pass: the min dihedral it brings the final mesh's tets to; auto = the worst tet's before "
-       "hole and refinement probes (a lower bound drops fewer late probes)",
+       "late sliver pass: the min dihedral it brings the final mesh's tets to, at most the worst tet's "
+       "before "
+       "hole and refinement probes; auto = that worst (on some levels it drops most of those probes and "
+       "their accuracy: docs/occlusion.md)",
        def("--late-min-dihedral")},
       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)",
        std::to_string(PipelineOptions{}.bake.threads)},
@@ -254,6 +256,7 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     throw UsageError("--late-slivers must be fix or keep, not '" + args.str("--late-slivers") + "'");
   opt.lateSlivers = args.str("--late-slivers") == "fix";
   opt.lateFillers = args.integer("--late-fillers");
+  opt.lateMinDihedral = -1.0;
   if (args.str("--late-min-dihedral") != "auto") {
     opt.lateMinDihedral = args.number("--late-min-dihedral");
     if (!(opt.lateMinDihedral >= 0.0 && opt.lateMinDihedral < 70.0))
