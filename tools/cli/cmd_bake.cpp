@@ -206,8 +206,21 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   else
     std::printf("  probes  %zu (grid %.3g m: %zu placed, %zu inside geometry rejected)\n",
                 level.probes.size(), opt.spacing, stats.gridProbes, stats.rejectedProbes);
-  std::printf("  tets    %zu (%s), worst min dihedral %.3g deg (%.3g before fillers)\n", level.tets.size(),
-              opt.tetra.c_str(), stats.minDihedral, stats.minDihedralBeforeFiller);
+  std::printf(
+      "  tets    %zu (%s), final mesh worst min dihedral %.3g deg, %zu / %zu / %zu tets under 1 / 5 / 10 deg "
+      "(%.3g before fillers, %.3g before hole and refinement probes)\n",
+      level.tets.size(), opt.tetra.c_str(), stats.minDihedral, stats.tetsBelow[0], stats.tetsBelow[1],
+      stats.tetsBelow[2], stats.minDihedralBeforeFiller, stats.minDihedralBeforeHoles);
+  if (stats.latePass)
+    std::printf(
+        "  late    slivers after hole and refinement probes (bound %.3g deg): worst %.3g -> %.3g deg, under "
+        "1 / 5 / 10 deg "
+        "%zu / %zu / %zu -> %zu / %zu / %zu; %zu fillers added, %zu late probes dropped (%zu hole, %zu "
+        "refinement)\n",
+        stats.lateTargetDeg, stats.minDihedralBeforeLate, stats.minDihedral, stats.tetsBelowBeforeLate[0],
+        stats.tetsBelowBeforeLate[1], stats.tetsBelowBeforeLate[2], stats.tetsBelow[0], stats.tetsBelow[1],
+        stats.tetsBelow[2], stats.lateFillers, stats.lateRemoved, stats.lateRemovedHole,
+        stats.lateRemovedRefinement);
   if (!stats.importedProbes) {
     std::printf("  rays    %llu (%.3g Mrays/s), %llu paths (%.0f per probe, at most %d)\n",
                 (unsigned long long)stats.bake.rays(), stats.bake.raysPerSecond() * 1e-6,
@@ -322,11 +335,27 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                    {"dilated", stats.dilatedProbes},
                    {"pushed", stats.pushedProbes},
                    {"merged", stats.mergedProbes}};
-    j["tets"] = {{"count", level.tets.size()},
-                 {"min_dihedral_deg", stats.minDihedral},
-                 {"min_dihedral_deg_before_filler", stats.minDihedralBeforeFiller},
-                 {"quality_histogram", {{"bin_deg", 5}, {"min_dihedral", stats.dihedralHistogram}}},
-                 {"outer_cells", level.outerCells.size()}};
+    j["tets"] = {
+        {"count", level.tets.size()},
+        {"min_dihedral_deg", stats.minDihedral},
+        {"min_dihedral_deg_before_filler", stats.minDihedralBeforeFiller},
+        {"min_dihedral_deg_before_holes", stats.minDihedralBeforeHoles},
+        {"quality_histogram", {{"bin_deg", 5}, {"min_dihedral", stats.dihedralHistogram}}},
+        {"below_1_5_10_deg", stats.tetsBelow},
+        {"worst_tet", stats.worstTet},
+        {"worst_tet_before_holes", stats.worstTetBeforeHoles},
+        {"late_pass",
+         {{"ran", stats.latePass},
+          {"min_dihedral_deg_before", stats.minDihedralBeforeLate},
+          {"bound_deg", stats.lateTargetDeg},
+          {"quality_histogram_before", {{"bin_deg", 5}, {"min_dihedral", stats.dihedralHistogramBeforeLate}}},
+          {"below_1_5_10_deg_before", stats.tetsBelowBeforeLate},
+          {"worst_tet_before", stats.worstTetBeforeLate},
+          {"fillers_added", stats.lateFillers},
+          {"probes_removed", stats.lateRemoved},
+          {"hole_probes_removed", stats.lateRemovedHole},
+          {"refinement_probes_removed", stats.lateRemovedRefinement}}},
+        {"outer_cells", level.outerCells.size()}};
     j["sh"] = {{"order", opt.bake.shOrder},
                {"deringed_probes", stats.dering.deringedProbes},
                {"unfixable_probes", stats.dering.unfixableProbes},

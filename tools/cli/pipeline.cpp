@@ -22,6 +22,7 @@
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/tetra/filler.h"
+#include "tetraprobe/tetra/final_slivers.h"
 #include "tetraprobe/tetra/placement.h"
 #include "tetraprobe/tetra/quality.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
@@ -89,6 +90,56 @@ ClearanceQuery tracerClearance(const SceneTracer& tracer, int threads) {
   };
 }
 
+// Tets of `mesh` whose min dihedral is under 1, 5 and 10 degrees.
+void tetsBelowDeg(const std::vector<glm::dvec3>& points, const TetMesh& mesh, std::array<size_t, 3>& out) {
+  out = {0, 0, 0};
+  for (const auto& t : mesh.tets) {
+    const double d =
+        tetQuality(points[size_t(t[0])], points[size_t(t[1])], points[size_t(t[2])], points[size_t(t[3])])
+            .minDihedralDeg;
+    out[0] += d < 1.0;
+    out[1] += d < 5.0;
+    out[2] += d < 10.0;
+  }
+}
+
+// The worst tet of `mesh` by min dihedral: its angle, whether a face is on the hull, its volume and its
+// probes' kinds, e.g. "0.000 deg, hull, 1.2e-17 m^3, shell shell shell surface".
+std::string describeWorstTet(const std::vector<glm::dvec3>& points, const TetMesh& mesh,
+                             const std::vector<LevelProbeKind>& kinds) {
+  static const char* const kNames[kLevelProbeKindCount] = {
+      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
+  size_t worst = mesh.tets.size();
+  double angle = 180.0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const auto& v = mesh.tets[t];
+    const double d =
+        tetQuality(points[size_t(v[0])], points[size_t(v[1])], points[size_t(v[2])], points[size_t(v[3])])
+            .minDihedralDeg;
+    if (d < angle) {
+      angle = d;
+      worst = t;
+    }
+  }
+  if (worst == mesh.tets.size()) return "";
+  const auto& v = mesh.tets[worst];
+  const auto& nb = mesh.neighbours[worst];
+  const glm::dvec3 p0 = points[size_t(v[0])];
+  const double volume =
+      glm::dot(points[size_t(v[1])] - p0, glm::cross(points[size_t(v[2])] - p0, points[size_t(v[3])] - p0)) /
+      6.0;
+  std::ostringstream out;
+  out.precision(3);
+  out << angle << " deg, " << (std::find(nb.begin(), nb.end(), -1) != nb.end() ? "hull" : "interior") << ", "
+      << volume << " m^3,";
+  for (int k = 0; k < 4; ++k) {
+    const size_t i = size_t(v[size_t(k)]);
+    out << ' '
+        << (i < kinds.size() && uint8_t(kinds[i]) < kLevelProbeKindCount ? kNames[uint8_t(kinds[i])] : "?");
+  }
+  return out.str();
+}
+
 }  // namespace
 
 double sceneLargestExtent(const Scene& scene) {
@@ -123,6 +174,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   std::vector<size_t> shell;          // indices of shell probes in `probes`
   std::vector<uint32_t> dilatedFrom;  // per probe, the probe whose SH it holds (after dilation)
   std::vector<LevelProbeKind> kinds;  // per probe, the stage that placed it (Level::probeKinds)
+  std::vector<double> spacing;        // per probe, its local spacing (voxel placement; else --spacing)
   ProbeShTable imported;
   if (!options.importShCsv.empty()) {
     if (!options.probesCsv.empty())
@@ -216,6 +268,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
                       uint8_t(ProbeKind::kSurface) == uint8_t(LevelProbeKind::kSurface),
                   "placement kinds 0..5 are stored as they are");
     for (ProbeKind k : placed.kinds) kinds.push_back(LevelProbeKind(uint8_t(k)));
+    spacing = std::move(placed.spacing);
     probes = std::move(placed.positions);
   } else if (options.placement != "grid") {
     throw InputError("unknown placement '" + options.placement + "' (voxel, grid or none)");
@@ -255,6 +308,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.minDihedralBeforeFiller = stats.minDihedral = q.worstMinDihedralDeg;
     stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
   }
+  // The bound the late sliver pass restores after hole and refinement probes.
+  stats.minDihedralBeforeHoles = stats.minDihedral;
+  const size_t firstLate = probes.size();
+  spacing.resize(probes.size(), options.spacing);
+  tetsBelowDeg(probes, mesh, stats.tetsBelow);
+  stats.worstTet = stats.worstTetBeforeHoles = describeWorstTet(probes, mesh, kinds);
   timer.mark("tetrahedralize");
   stage.emplace("cell grid", 0, "", show);
 
@@ -364,22 +423,34 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     timer.mark("occlusion");
   }
 
-  // Appends probes (earlier probes keep their index, so their SH and seeds), bakes them with a seed of their
-  // own, and tetrahedralizes and occludes the whole level again.
-  auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt, LevelProbeKind kind) {
-    probes.insert(probes.end(), added.begin(), added.end());
-    kinds.insert(kinds.end(), added.size(), kind);
+  // The level's tets, outer cells and cell grid for `probes` as they stand (`given`: their Delaunay mesh,
+  // already computed), and the final-mesh quality figures.
+  auto remesh = [&](const TetMesh* given) {
     stage.emplace("tetrahedralize", 0, "", show);
-    const TetMesh grown =
-        options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh : tetrahedralizeDelaunay(probes);
+    const TetMesh grown = given                       ? *given
+                          : options.tetra == "tetgen" ? tetrahedralizeTetGen(probes).mesh
+                                                      : tetrahedralizeDelaunay(probes);
     const MeshQuality q = meshQuality(probes, grown);
     stats.minDihedral = q.worstMinDihedralDeg;
     stats.dihedralHistogram.assign(q.minDihedralHistogram.begin(), q.minDihedralHistogram.end());
-    for (const glm::dvec3& p : added) level.probes.push_back(glm::vec3(p - level.origin));
+    tetsBelowDeg(probes, grown, stats.tetsBelow);
+    stats.worstTet = describeWorstTet(probes, grown, kinds);
     stage.emplace("cell grid", 0, "", show);
     level.tets = buildTetRecords(probes, grown, level.origin);
     level.outerCells = buildOuterCells(level.probes, level.tets);
     level.cellGrid = buildCellGrid(level.probes, level.tets);
+  };
+  bool occlusionStale = false;  // probes changed since the last occlude()
+
+  // Appends probes (earlier probes keep their index, so their SH and seeds), bakes them with a seed of their
+  // own, and tetrahedralizes the whole level again; occludes it again unless `reocclude` is false.
+  auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt, LevelProbeKind kind,
+                       bool reocclude = true, const TetMesh* given = nullptr) {
+    probes.insert(probes.end(), added.begin(), added.end());
+    kinds.insert(kinds.end(), added.size(), kind);
+    spacing.insert(spacing.end(), added.size(), options.spacing);
+    for (const glm::dvec3& p : added) level.probes.push_back(glm::vec3(p - level.origin));
+    remesh(given);
     BakeOptions bake = options.bake;
     bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
     // The path budget is the whole bake's: added probes get what the earlier passes left.
@@ -395,7 +466,87 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
     deringProbes(sh, dering);
     level.sh.insert(level.sh.end(), sh.begin(), sh.end());
-    if (options.occlusion.mode != OcclusionMode::kNone) occlude();
+    occlusionStale = options.occlusion.mode != OcclusionMode::kNone;
+    if (reocclude && occlusionStale) {
+      occlude();
+      occlusionStale = false;
+    }
+  };
+
+  // The late sliver pass (tetra/final_slivers.h), once every hole and refinement probe is in: fillers within
+  // --late-fillers, then the late probe of each sliver left is dropped (its SH with it); the level is
+  // tetrahedralized and occluded for the final probes.
+  bool lateDone = false;
+  auto latePass = [&] {
+    lateDone = true;
+    // Voxel placement only: the filler bounded its mesh; user probes alone and the grid have no bound to keep.
+    if (options.lateSlivers && options.placement == "voxel" && probes.size() > firstLate) {
+      stage.emplace("late slivers", 0, "", show);
+      stats.latePass = true;
+      FinalSliverOptions fo;
+      fo.backend = options.tetra == "tetgen" ? TetraBackend::kTetGen : TetraBackend::kCgal;
+      fo.targetDeg = options.lateMinDihedral < 0.0
+                         ? stats.minDihedralBeforeHoles
+                         : std::min(options.lateMinDihedral, stats.minDihedralBeforeHoles);
+      stats.lateTargetDeg = fo.targetDeg;
+      fo.firstLate = firstLate;
+      fo.maxFillers = size_t(std::max(0, options.lateFillers));
+      const ClearanceQuery clearance = tracerClearance(tracer, options.bake.threads);
+      const FinalSliverResult r =
+          fixFinalSlivers(probes, spacing, fo, [&](const std::vector<glm::dvec3>& pts) {
+            const std::vector<Clearance> c = clearance(pts, std::vector<double>(pts.size(), options.spacing));
+            std::vector<uint8_t> in(pts.size());
+            for (size_t i = 0; i < pts.size(); ++i)
+              in[i] = c[i].inside || c[i].nearest < 0.05 * options.spacing;
+            return in;
+          });
+      stats.minDihedralBeforeLate = r.before.worstMinDihedralDeg;
+      stats.dihedralHistogramBeforeLate.assign(r.before.minDihedralHistogram.begin(),
+                                               r.before.minDihedralHistogram.end());
+      stats.tetsBelowBeforeLate = stats.tetsBelow;
+      stats.worstTetBeforeLate = stats.worstTet;
+      stats.lateRemoved = r.removed.size();
+      stats.lateFillers = r.added.size();
+      if (!r.removed.empty()) {
+        std::vector<uint8_t> drop(probes.size(), 0);
+        for (size_t i : r.removed) {
+          drop[i] = 1;
+          stats.lateRemovedHole += kinds[i] == LevelProbeKind::kHole;
+          stats.lateRemovedRefinement += kinds[i] == LevelProbeKind::kRefinement;
+        }
+        size_t w = 0;
+        for (size_t i = 0; i < probes.size(); ++i) {
+          if (drop[i]) continue;
+          probes[w] = probes[i];
+          kinds[w] = kinds[i];
+          spacing[w] = spacing[i];
+          level.probes[w] = level.probes[i];
+          level.sh[w] = level.sh[i];
+          ++w;
+        }
+        probes.resize(w);
+        kinds.resize(w);
+        spacing.resize(w);
+        level.probes.resize(w);
+        level.sh.resize(w);
+      }
+      if (!r.added.empty())
+        addProbes(r.added, 0x51173ull, LevelProbeKind::kFiller, false, &r.mesh);
+      else if (!r.removed.empty())
+        remesh(&r.mesh);
+      occlusionStale = occlusionStale || !r.removed.empty();
+      timer.mark("late slivers");
+    } else {
+      stats.minDihedralBeforeLate = stats.minDihedral;
+      stats.dihedralHistogramBeforeLate = stats.dihedralHistogram;
+      stats.tetsBelowBeforeLate = stats.tetsBelow;
+      stats.worstTetBeforeLate = stats.worstTet;
+    }
+    if (occlusionStale && options.occlusion.mode != OcclusionMode::kNone) {
+      occlude();
+      occlusionStale = false;
+      timer.mark("occlusion (final)");
+    }
   };
   const bool baked = options.importShCsv.empty();
 
@@ -446,12 +597,16 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     const std::vector<glm::dvec3> added =
         proposeRefinement(tracer, level, select, size_t(budget), options.spacing, 0.1, options.refineOffset);
     stats.refineProbes = added.size();
-    if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement);
+    // Occluded once, after the late sliver pass (which may remove some of these probes).
+    if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement, !options.lateSlivers);
+    timer.mark("refine");
+    latePass();
     stage.emplace("refine (check)", 0, "", show);
     stats.refineAfter = scoreRefinePoints(level, check);
-    timer.mark("refine");
+    timer.mark("refine (check)");
     stage.reset();
   }
+  if (!lateDone) latePass();
 
   // What the user gets: the surface points of the finished level (after hole filling and refinement, which
   // both re-tetrahedralize) that still see none of their tet's probes, on a draw of their own. Reported only.

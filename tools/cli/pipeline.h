@@ -2,6 +2,7 @@
 // `tetraprobe bake` and the end-to-end tests.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -76,6 +77,17 @@ struct PipelineOptions {
   // least kAutoRefinePointsMin, so that the points grow with the level as its budget does (a level 16 times
   // the size selects its 16 times the probes from 16 times the points, as a room does).
   int refinePoints = -1;
+  // The late sliver pass (tetra/final_slivers.h) after hole and refinement probes: brings the worst tet of the
+  // final mesh back to the worst before those probes (or lateMinDihedral when lower), with at most lateFillers filler probes (baked like the
+  // other added probes) and then by removing the late probe of each sliver left. Off: the late probes' slivers
+  // stay (the default: dropping refinement probes cost the Cornell box accuracy at its cameras, gross 0.033 ->
+  // 0.039 at the 2 deg bound; docs/occlusion.md).
+  bool lateSlivers = false;
+  int lateFillers = 0;
+  // The pass's bound, degrees: the smaller of this and the worst tet's before those probes; < 0 = auto (the
+  // worst before those probes, whatever it is). 2 by default: on Veach Ajar (14.6 deg before) and the Cornell
+  // box (7.2) the auto bound drops most hole and refinement probes and their accuracy with them.
+  double lateMinDihedral = 2.0;
   // How far in front of its surface point a refinement probe sits at most, metres; <= 0: auto, spacing x
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;
@@ -109,8 +121,21 @@ struct PipelineStats {
   size_t dilatedProbes = 0;  // shell probes outside a closed level: SH copied from the nearest valid probe
   size_t pushedProbes = 0;   // moved out of geometry or off a surface
   size_t mergedProbes = 0;   // dropped as near-coincident (tolerance 0.1 x local spacing)
-  double minDihedralBeforeFiller = 0.0, minDihedral = 0.0;  // worst tet, degrees
-  std::vector<uint64_t> dihedralHistogram;                  // tets per 5-degree bin of min dihedral
+  double minDihedralBeforeFiller = 0.0, minDihedral = 0.0;  // worst tet, degrees (minDihedral: final mesh)
+  std::vector<uint64_t> dihedralHistogram;  // final mesh: tets per 5-degree bin of min dihedral
+  std::array<size_t, 3> tetsBelow{};        // final mesh: tets under 1, 5, 10 degrees
+  // The mesh before hole and refinement probes (after the fillers) and before the late sliver pass (after
+  // them); the late pass's fillers and the late probes it removed.
+  double minDihedralBeforeHoles = 0.0, minDihedralBeforeLate = 0.0;
+  std::vector<uint64_t> dihedralHistogramBeforeLate;
+  std::array<size_t, 3> tetsBelowBeforeLate{};
+  // The worst tet of the final mesh, before hole and refinement probes and before the late pass: angle,
+  // hull or interior, volume and its probes' kinds (why it is flat).
+  std::string worstTet, worstTetBeforeHoles, worstTetBeforeLate;
+  bool latePass = false;
+  double lateTargetDeg =
+      0.0;  // the bound it worked to  // the late pass ran (probes were added after the fillers)
+  size_t lateFillers = 0, lateRemoved = 0, lateRemovedHole = 0, lateRemovedRefinement = 0;
 
   // Occlusion-hole filling, per round: surface points checked, points seeing none of their probes, probes
   // added; and after the last round, the points still falling back (measured on a fresh draw).

@@ -132,6 +132,21 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "refinement: how far in front of its surface point a new probe sits at most (half the free "
        "distance when less); auto = spacing / 8, close enough to see what the surface sees",
        def("--refine-offset")},
+      {"--late-slivers", "", "fix|keep",
+       "after hole and refinement probes: fix = bring the final mesh's worst tet back to the worst before "
+       "them (late fillers, then the late probe of each sliver left is dropped; docs/occlusion.md); keep = "
+       "leave their slivers (the default: dropping refinement probes cost the Cornell box accuracy)",
+       def("--late-slivers")},
+      {"--late-fillers", "", "N",
+       "late sliver pass: filler probes it may add (each baked like a refinement probe) before it drops "
+       "late probes",
+       def("--late-fillers")},
+      {"--late-min-dihedral", "", "auto|DEG",
+       "late sliver pass: the min dihedral it brings the final mesh's tets to, at most the worst tet's "
+       "before "
+       "hole and refinement probes; auto = that worst (on some levels it drops most of those probes and "
+       "their accuracy: docs/occlusion.md)",
+       def("--late-min-dihedral")},
       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)",
        std::to_string(PipelineOptions{}.bake.threads)},
       {"--shard", "", "I/N",
@@ -240,6 +255,17 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     if (!(opt.refineOffset > 0.0) || !std::isfinite(opt.refineOffset))
       throw UsageError("--refine-offset must be auto or a positive number of metres");
   }
+  if (args.str("--late-slivers") != "fix" && args.str("--late-slivers") != "keep")
+    throw UsageError("--late-slivers must be fix or keep, not '" + args.str("--late-slivers") + "'");
+  opt.lateSlivers = args.str("--late-slivers") == "fix";
+  opt.lateFillers = args.integer("--late-fillers");
+  opt.lateMinDihedral = -1.0;
+  if (args.str("--late-min-dihedral") != "auto") {
+    opt.lateMinDihedral = args.number("--late-min-dihedral");
+    if (!(opt.lateMinDihedral >= 0.0 && opt.lateMinDihedral < 70.0))
+      throw UsageError("--late-min-dihedral must be auto or a number of degrees in [0, 70)");
+  }
+  if (opt.lateFillers < 0) throw UsageError("--late-fillers must be >= 0");
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
@@ -278,6 +304,9 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--probe-budget", o.probeBudget < 0 ? "auto" : std::to_string(o.probeBudget));
   add("--refine-points", o.refinePoints < 0 ? "auto" : std::to_string(o.refinePoints));
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");
+  add("--late-slivers", o.lateSlivers ? "fix" : "keep");
+  add("--late-fillers", std::to_string(o.lateFillers));
+  add("--late-min-dihedral", o.lateMinDihedral < 0.0 ? "auto" : exactNumber(o.lateMinDihedral));
   return v;
 }
 
