@@ -1,10 +1,11 @@
-// Vulkan upload of a level's tets, SH, start grid, outer cells, cell grid and occlusion into the storage
+// Vulkan upload of a level's tets, SH, start grid, outer cells, start bricks (from the cell grid) and occlusion into the storage
 // buffers shaders/tetraprobe_layout.glsl declares: packed on the host (gpu_layout.h), written into one
 // host-visible staging buffer and copied by vkCmdCopyBuffer into buffers in device-local memory (one
 // allocation per buffer), so the per-pixel reads stay on the GPU's own memory on a discrete GPU.
 #include "tetraprobe/runtime/vulkan_upload.h"
 
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/start_bricks.h"
 #include "vulkan_staging.h"
 
 #include <algorithm>
@@ -221,15 +222,18 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     }
   }
 
-  // The cell grid: every root, child and leaf entry the shader follows, in range.
+  // The start bricks (start_bricks.h) from the cell grid's cells: every brick index and start tet the shader
+  // follows, in range. The BSP's own links are not uploaded (the CPU's start only).
+  const StartBricks bricks = buildStartBricks(level, grid, cellGrid);
   {
-    const auto nodeCount = int64_t(cellGrid.nodes.size());
-    const auto validLeaf = [&](int32_t code) { return code == kEmptyLeaf || int64_t(~code) < tetCount; };
-    const auto validChild = [&](int32_t c) { return c >= 0 ? c < nodeCount : validLeaf(c); };
-    bool ok = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
-    for (const CellSlot& s : cellGrid.slots) ok = ok && (s.key[0] == INT32_MIN || validChild(s.root));
-    for (const BspNode& n : cellGrid.nodes) ok = ok && validChild(n.child[0]) && validChild(n.child[1]);
-    if (!ok) {
+    const bool tableOk = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
+    const size_t perBrick = size_t(bricks.dim) * size_t(bricks.dim) * size_t(bricks.dim);
+    const auto brickCount = int64_t(perBrick == 0 ? 0 : bricks.startTet.size() / perBrick);
+    bool ok = tableOk;
+    for (const CellSlot& s : bricks.slots)
+      ok = ok && (s.key[0] == INT32_MIN || (s.root >= 0 && s.root < brickCount));
+    for (int32_t t : bricks.startTet) ok = ok && t >= 0 && t < tetCount;
+    if (!ok || bricks.slots.size() + bricks.startTet.size() > size_t(INT32_MAX / 4)) {
       if (error) *error = "cell grid has an index out of range";
       return fail();
     }
@@ -274,14 +278,15 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     appendBytes(data[kGpuBindingOuterCells], &g, 1);
   }
   GpuCellGridHeader cellHeader{};
-  for (int i = 0; i < 3; ++i) cellHeader.min[i] = cellGrid.min[i];
-  cellHeader.cellSize = cellGrid.cellSize;
-  cellHeader.slotMask = cellGrid.slots.empty() ? 0u : uint32_t(cellGrid.slots.size() - 1);
-  cellHeader.maxProbe = cellGrid.slots.empty() ? 0u : cellGrid.maxProbe;
-  cellHeader.nodeOffset = int32_t(4 * cellGrid.slots.size());
+  for (int i = 0; i < 3; ++i) cellHeader.min[i] = bricks.min[i];
+  cellHeader.cellSize = bricks.cellSize;
+  cellHeader.slotMask = bricks.slots.empty() ? 0u : uint32_t(bricks.slots.size() - 1);
+  cellHeader.maxProbe = bricks.slots.empty() ? 0u : bricks.maxProbe;
+  cellHeader.brickOffset = int32_t(4 * bricks.slots.size());
+  cellHeader.brickDim = bricks.dim;
   appendBytes(data[kGpuBindingCells], &cellHeader, 1);
-  appendBytes(data[kGpuBindingCells], cellGrid.slots.data(), cellGrid.slots.size());
-  appendBytes(data[kGpuBindingCells], cellGrid.nodes.data(), cellGrid.nodes.size());
+  appendBytes(data[kGpuBindingCells], bricks.slots.data(), bricks.slots.size());
+  appendBytes(data[kGpuBindingCells], bricks.startTet.data(), bricks.startTet.size());
 
   const LevelOcclusion& occ = level.occlusion;
   GpuOcclusionHeader occHeader{};

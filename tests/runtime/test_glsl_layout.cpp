@@ -159,8 +159,8 @@ std::vector<ExpectedBlock> expectedBlocks() {
         {"tetraprobeCellSize", long(offsetof(GpuCellGridHeader, cellSize))},
         {"tetraprobeCellSlotMask", long(offsetof(GpuCellGridHeader, slotMask))},
         {"tetraprobeCellMaxProbe", long(offsetof(GpuCellGridHeader, maxProbe))},
-        {"tetraprobeCellNodeOffset", long(offsetof(GpuCellGridHeader, nodeOffset))},
-        {"tetraprobeCellReserved", long(offsetof(GpuCellGridHeader, reserved))},
+        {"tetraprobeCellBrickOffset", long(offsetof(GpuCellGridHeader, brickOffset))},
+        {"tetraprobeCellBrickDim", long(offsetof(GpuCellGridHeader, brickDim))},
         {"tetraprobeCellData", long(sizeof(GpuCellGridHeader)), long(sizeof(int32_t))}}},
       {"TetraprobeOcclusion",
        kGpuBindingOcclusion,
@@ -275,7 +275,6 @@ std::map<std::string, Twin> cppTwins() {
       // ShHalf::h[27] (after the 27 coefficients) is the high half of uint 27 / 2.
       {"TETRAPROBE_SH_SCALE_UINT", i((3 * kShCoeffCount) / 2)},
       {"TETRAPROBE_CELL_SLOT_INTS", i(sizeof(CellSlot) / sizeof(int32_t))},
-      {"TETRAPROBE_BSP_NODE_INTS", i(sizeof(BspNode) / sizeof(int32_t))},
       {"TETRAPROBE_EMPTY_LEAF", i(kEmptyLeaf)},
       {"TETRAPROBE_OCC_RECORD_UINTS", i(sizeof(TetOcclusion) / sizeof(uint32_t))},
       {"TETRAPROBE_OCC_KIND_PLANES", i(kOcclusionPlanes)},
