@@ -744,7 +744,7 @@ vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, ve
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
   uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)],
        cells = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t) + 1u];
-  uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
+  uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> TETRAPROBE_OCC_OFFSET_SHIFT;
   if (!(kind == TETRAPROBE_OCC_KIND_PLANES && tetraprobeUsePlanes) &&
       !(kind == TETRAPROBE_OCC_KIND_SHADOW_MAPS && tetraprobeUseShadowMaps))
     return vec4(1.0);
@@ -857,8 +857,13 @@ float tetraprobeFaceTrust(float blind) {  // c: the trust in a side
 // Tet t's visibility `vis` of its probes at x, blended near each face with the neighbour's visibility of
 // the face's probes, so that both sides of a face use the same numbers.
 vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n) {
+  // The faces whose blend may change anything (faceBlendMask, set at upload); none: nothing to do.
+  if (t < 0 || uint(t) >= tetraprobeOccTetCount) return vis;
+  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
+  uint flags = (header >> TETRAPROBE_OCC_FACE_MASK_SHIFT) & 15u;
+  if (flags == 0u) return vis;
   ivec4 tv = tetraprobeTets[t].v, nbs = tetraprobeTets[t].n;
-  bool ownData = tetraprobeOccKind(t) != 0u;
+  bool ownData = (header & 3u) != 0u;
   vec4 o = vis;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
@@ -870,7 +875,7 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   int count = 0;
   for (int k = 0; k < 4; ++k) {
     int nb = nbs[k];
-    if (!(weights[k] < band) || nb < 0) continue;
+    if (!(weights[k] < band) || ((flags >> uint(k)) & 1u) == 0u) continue;  // a flag: nb >= 0
     if (tetraprobeOccKind(nb) ==
         0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
       bool allSeen = true;

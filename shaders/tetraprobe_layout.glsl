@@ -32,6 +32,8 @@
 #define TETRAPROBE_OCC_RECORD_UINTS 2u          // a tet's occlusion record: header, cells [TetOcclusion]
 #define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
 #define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
+#define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: the blend's face flags [kGpuOccFaceMaskShift]
+#define TETRAPROBE_OCC_OFFSET_SHIFT 8u          // header >> it: the first plane or block [kGpuOccOffsetShift]
 #define TETRAPROBE_OCC_PLANE_UINTS 2u           // a plane: four snorm16 [OcclusionPlane]
 // snorm16 to float: the float nearest 1 / 32767 [OcclusionPlane::kOcclusionPlaneUnit]
 #define TETRAPROBE_OCC_PLANE_UNIT 3.0518509447574615e-05
@@ -102,7 +104,7 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly 
 };
 
 // Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[2 t], data[2 t + 1]: tet t's
-// record (header, cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
+// record (header: kind, plane count, face flags, offset, gpu_layout.h; cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
 // tetraprobeOccShadowOffset (16 uints each, bytes little-endian). tetraprobeOccTetCount 0: no occlusion.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {
   uint tetraprobeOccTetCount;      // offset 0

@@ -4,6 +4,7 @@
 // allocation per buffer), so the per-pixel reads stay on the GPU's own memory on a discrete GPU.
 #include "tetraprobe/runtime/vulkan_upload.h"
 
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/start_bricks.h"
 #include "vulkan_staging.h"
@@ -297,7 +298,17 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   }
   appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
   if (occHeader.tetCount > 0) {
-    appendBytes(data[kGpuBindingOcclusion], occ.tets.data(), occ.tets.size());
+    std::vector<TetOcclusion> records(occ.tets.size());
+    for (size_t t = 0; t < occ.tets.size(); ++t) {
+      if (occ.tets[t].offset() > kGpuOccMaxOffset) {
+        if (error)
+          *error = "tet " + std::to_string(t) + "'s occlusion offset is beyond the GPU record's 2^24";
+        return fail();
+      }
+      records[t] = {gpuOcclusionHeader(occ.tets[t], faceBlendMask(level, occ, int32_t(t))),
+                    occ.tets[t].cells};
+    }
+    appendBytes(data[kGpuBindingOcclusion], records.data(), records.size());
     appendBytes(data[kGpuBindingOcclusion], occ.planes.data(), occ.planes.size());
     appendBytes(data[kGpuBindingOcclusion], occ.shadowMaps.data(), occ.shadowMaps.size());
   }

@@ -279,6 +279,8 @@ std::map<std::string, Twin> cppTwins() {
       {"TETRAPROBE_OCC_RECORD_UINTS", i(sizeof(TetOcclusion) / sizeof(uint32_t))},
       {"TETRAPROBE_OCC_KIND_PLANES", i(kOcclusionPlanes)},
       {"TETRAPROBE_OCC_KIND_SHADOW_MAPS", i(kOcclusionShadowMaps)},
+      {"TETRAPROBE_OCC_FACE_MASK_SHIFT", i(kGpuOccFaceMaskShift)},
+      {"TETRAPROBE_OCC_OFFSET_SHIFT", i(kGpuOccOffsetShift)},
       {"TETRAPROBE_OCC_PLANE_UINTS", i(sizeof(OcclusionPlane) / sizeof(uint32_t))},
       {"TETRAPROBE_OCC_PLANE_UNIT", f(OcclusionPlane::kOcclusionPlaneUnit)},
       {"TETRAPROBE_SHADOW_BLOCK_UINTS", i(kShadowMapBlockBytes / sizeof(uint32_t))},

@@ -9,6 +9,7 @@
 
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion_data.h"
 #include "tetraprobe/runtime/sh.h"
 #include "tetraprobe/runtime/sh_half.h"
 
@@ -103,6 +104,18 @@ static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t), "TetraprobeCells: 4 ints 
 // after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes
 // from planeOffset (2 uints each: four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the shadow-map blocks from shadowOffset (16 uints each, little-endian
 // bytes). tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
+// A tet's record on the GPU is TetOcclusion with its header repacked to hold the face flags of the blend
+// (face_blend.h, faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3),
+// face mask (4-7, bit 4 + k for face k), offset (from bit 8, so below 2^24 planes or shadow-map blocks; the
+// upload refuses more). `cells` as is.
+inline constexpr uint32_t kGpuOccFaceMaskShift = 4;
+inline constexpr uint32_t kGpuOccOffsetShift = 8;
+inline constexpr uint32_t kGpuOccMaxOffset = (1u << (32 - kGpuOccOffsetShift)) - 1u;
+inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t faceMask) {
+  return uint32_t(rec.kind()) | rec.planeCount() << 2 | (faceMask & 15u) << kGpuOccFaceMaskShift |
+         rec.offset() << kGpuOccOffsetShift;
+}
+
 struct GpuOcclusionHeader {
   uint32_t tetCount;      // uint tetraprobeOccTetCount: 0 = no occlusion
   uint32_t planeOffset;   // uint tetraprobeOccPlaneOffset
