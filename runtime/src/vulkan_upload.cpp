@@ -223,8 +223,24 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     }
   }
 
+  // The cell grid: every root, child and leaf entry the brick build descends, in range and acyclic (it is not
+  // uploaded, but buildStartBricks descends it).
+  {
+    const auto nodeCount = int64_t(cellGrid.nodes.size());
+    const auto validLeaf = [&](int32_t code) { return code == kEmptyLeaf || int64_t(~code) < tetCount; };
+    const auto validChild = [&](int32_t c) { return c >= 0 ? c < nodeCount : validLeaf(c); };
+    bool ok = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
+    for (const CellSlot& s : cellGrid.slots) ok = ok && (s.key[0] == INT32_MIN || validChild(s.root));
+    // A child node's index is larger than its parent's (cell_grid.h): the descent ends.
+    for (int64_t i = 0; i < nodeCount; ++i)
+      for (const int32_t c : cellGrid.nodes[size_t(i)].child) ok = ok && validChild(c) && (c < 0 || c > i);
+    if (!ok) {
+      if (error) *error = "cell grid has an index out of range";
+      return fail();
+    }
+  }
   // The start bricks (start_bricks.h) from the cell grid's cells: every brick index and start tet the shader
-  // follows, in range. The BSP's own links are not uploaded (the CPU's start only).
+  // follows, in range.
   const StartBricks bricks = buildStartBricks(level, grid, cellGrid);
   {
     const bool tableOk = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;

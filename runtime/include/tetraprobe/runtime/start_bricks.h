@@ -20,8 +20,8 @@
 
 namespace tetraprobe {
 
-// Sub-cells along a brick's edge: 16 m cells in 2 m sub-cells (docs/rendering.md: measured against 4 and 16).
-inline constexpr int32_t kStartBrickDim = 8;
+// Sub-cells along a brick's edge: 16 m cells in 1 m sub-cells (docs/rendering.md: measured against 4 and 8).
+inline constexpr int32_t kStartBrickDim = 16;
 
 struct StartBricks {
   glm::vec3 min{0.0f};  // the cell grid's: cell (i,j,k) covers min + [i, i+1) * cellSize per axis
@@ -39,7 +39,9 @@ struct StartBricks {
 // reaches (up to 64 steps of the ordinary walk in float, stopping at a hull face): the tet holding the
 // centre, or for a centre outside the hull the hull tet the walk stops at; where the centre's leaf is empty,
 // the walk starts from the start grid's cell (`grid`, ProbeQuery::startGrid()). Deterministic. Empty when
-// the level has no tets or the cell grid no cells. Allocates the result.
+// the level has no tets or the cell grid no cells. `cellGrid` must be well formed (indices in range, children
+// after their parents: as buildCellGrid makes it and loadLevel checks it; packLevelBuffers checks it first).
+// Allocates the result.
 StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const CellGrid& cellGrid,
                              int32_t dim = kStartBrickDim);
 
