@@ -8,9 +8,9 @@
 //   is albedo * E / pi. E can be slightly negative where the L2 projection rings; clamp if you need to.
 // - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: a walk from `hint` (a tet index, e.g. last
 //   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
-//   the tet named by the start brick's sub-cell holding localPos (runtime/start_bricks.h: one hash search and
-//   one load; that tet holds the sub-cell's centre, so the walk takes a step or a few; for an absent cell, the
-//   start-grid cell's tet; at most tetraprobeMaxWalkSteps). Each step
+//   the tet named by the start brick's sub-cell holding localPos (runtime/start_bricks.h: one hash search
+//   and one load; that tet holds the sub-cell's centre, so the walk takes a step or a few; for an absent
+//   cell, the start-grid cell's tet; at most tetraprobeMaxWalkSteps). Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
@@ -494,7 +494,8 @@ int tetraprobeCellStartTet(vec3 x) {
   if (brick < 0) return -1;
   int dim = tetraprobeCellBrickDim;
   ivec3 s = ivec3(clamp((g - f) * float(dim), vec3(0.0), vec3(float(dim - 1))));
-  return tetraprobeCellData[tetraprobeCellBrickOffset + dim * dim * dim * brick + s.x + dim * (s.y + dim * s.z)];
+  int base = tetraprobeCellBrickOffset + dim * dim * dim * brick;
+  return tetraprobeCellData[base + s.x + dim * (s.y + dim * s.z)];
 }
 
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can

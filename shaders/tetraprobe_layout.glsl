@@ -32,7 +32,7 @@
 #define TETRAPROBE_OCC_RECORD_UINTS 2u          // a tet's occlusion record: header, cells [TetOcclusion]
 #define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
 #define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
-#define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: the blend's face flags [kGpuOccFaceMaskShift]
+#define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: face flags [kGpuOccFaceMaskShift]
 #define TETRAPROBE_OCC_OFFSET_SHIFT 8u          // header >> it: the first plane or block [kGpuOccOffsetShift]
 #define TETRAPROBE_OCC_PLANE_UINTS 2u           // a plane: four snorm16 [OcclusionPlane]
 // snorm16 to float: the float nearest 1 / 32767 [OcclusionPlane::kOcclusionPlaneUnit]
