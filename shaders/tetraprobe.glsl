@@ -8,9 +8,9 @@
 //   is albedo * E / pi. E can be slightly negative where the L2 projection rings; clamp if you need to.
 // - tetraprobeLocate(localPos, hint) is ProbeQuery::locate: a walk from `hint` (a tet index, e.g. last
 //   frame's tet of the object; at most TETRAPROBE_MAX_HINT_STEPS steps, used when it ends inside), else from
-//   the tet named by the sparse cell grid's BSP leaf holding localPos, which holds it but within rounding of
-//   a face (else, for an absent cell or empty leaf, the start-grid cell's tet; at most
-//   tetraprobeMaxWalkSteps). Each step
+//   the tet named by the start brick's sub-cell holding localPos (runtime/start_bricks.h: one hash search
+//   and one load; that tet holds the sub-cell's centre, so the walk takes a step or a few; for an absent
+//   cell, the start-grid cell's tet; at most tetraprobeMaxWalkSteps). Each step
 //   computes the four barycentric weights; when none is below -TETRAPROBE_INSIDE_EPS the point is inside
 //   (within that tolerance of a face, the neighbour is taken if it holds the point better); otherwise the walk
 //   moves to the neighbour opposite the most negative weight (the first one on ties). Leaving through a hull
@@ -458,7 +458,7 @@ void tetraprobeOuterLocate(vec3 x, int cur, inout TetraprobeLocation loc) {
 #endif
 }
 
-// --- the sparse cell grid + BSP (runtime/cell_grid.h): the walk's start -------------------------------
+// --- the start bricks (runtime/start_bricks.h): the walk's start ---------------------------------------
 
 // tetraprobe::cellHash.
 uint tetraprobeCellHash(ivec3 k) {
@@ -471,35 +471,31 @@ uint tetraprobeCellHash(ivec3 k) {
   return h;
 }
 
-// The tet named by the BSP leaf holding local point x, or -1 (no grid, cell absent, empty leaf).
+// The start tet of the brick sub-cell holding local point x (a tet holding x or a few steps from it), or -1
+// (no bricks, or x's cell is absent: x is outside every tet up to rounding).
 int tetraprobeCellStartTet(vec3 x) {
   if (tetraprobeCellMaxProbe == 0u) return -1;
-  vec3 f = floor((x - tetraprobeCellMin) / tetraprobeCellSize);
+  vec3 g = (x - tetraprobeCellMin) / tetraprobeCellSize;
+  vec3 f = floor(g);
   if (!(all(greaterThanEqual(f, vec3(-2e9))) && all(lessThanEqual(f, vec3(2e9))))) return -1;  // also NaN
   ivec3 key = ivec3(f);
   uint h = tetraprobeCellHash(key) & tetraprobeCellSlotMask;
-  int node = 0;
-  bool found = false;
+  int brick = -1;
   for (uint p = 0u; p < tetraprobeCellMaxProbe; ++p) {
     int b = TETRAPROBE_CELL_SLOT_INTS * int(h);
     if (tetraprobeCellData[b] == TETRAPROBE_EMPTY_LEAF) break;
     if (tetraprobeCellData[b] == key.x && tetraprobeCellData[b + 1] == key.y &&
         tetraprobeCellData[b + 2] == key.z) {
-      node = tetraprobeCellData[b + 3];
-      found = true;
+      brick = tetraprobeCellData[b + 3];
       break;
     }
     h = (h + 1u) & tetraprobeCellSlotMask;
   }
-  if (!found) return -1;
-  for (int d = 0; d < 256 && node >= 0; ++d) {
-    int b = tetraprobeCellNodeOffset + TETRAPROBE_BSP_NODE_INTS * node;
-    vec4 pl = intBitsToFloat(ivec4(tetraprobeCellData[b], tetraprobeCellData[b + 1],
-                                   tetraprobeCellData[b + 2], tetraprobeCellData[b + 3]));
-    precise float s = pl.x * x.x + pl.y * x.y + pl.z * x.z + pl.w;
-    node = tetraprobeCellData[b + 4 + (s >= 0.0 ? 1 : 0)];
-  }
-  return node >= 0 || node == TETRAPROBE_EMPTY_LEAF ? -1 : ~node;
+  if (brick < 0) return -1;
+  int dim = tetraprobeCellBrickDim;
+  ivec3 s = ivec3(clamp((g - f) * float(dim), vec3(0.0), vec3(float(dim - 1))));
+  int base = tetraprobeCellBrickOffset + dim * dim * dim * brick;
+  return tetraprobeCellData[base + s.x + dim * (s.y + dim * s.z)];
 }
 
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can
@@ -579,7 +575,7 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
   if (hint >= 0 && hint < tetraprobeTetCount &&
       tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) && exitFace < 0)
     return loc;
-  // The cell grid's leaf names the start (the coarse start grid where the cell is absent).
+  // The start brick names the start (the coarse start grid where the cell is absent).
   int start = tetraprobeUseCellGrid ? tetraprobeCellStartTet(x) : -1;
   if (start < 0) start = tetraprobeStartCellTet(x);
   bool walked = tetraprobeWalk(x, start, tetraprobeMaxWalkSteps, loc, exitFace);
@@ -749,7 +745,7 @@ vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, ve
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
   uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)],
        cells = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t) + 1u];
-  uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> 4;
+  uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> TETRAPROBE_OCC_OFFSET_SHIFT;
   if (!(kind == TETRAPROBE_OCC_KIND_PLANES && tetraprobeUsePlanes) &&
       !(kind == TETRAPROBE_OCC_KIND_SHADOW_MAPS && tetraprobeUseShadowMaps))
     return vec4(1.0);
@@ -862,8 +858,13 @@ float tetraprobeFaceTrust(float blind) {  // c: the trust in a side
 // Tet t's visibility `vis` of its probes at x, blended near each face with the neighbour's visibility of
 // the face's probes, so that both sides of a face use the same numbers.
 vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n) {
+  // The faces whose blend may change anything (faceBlendMask, set at upload); none: nothing to do.
+  if (t < 0 || uint(t) >= tetraprobeOccTetCount) return vis;
+  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
+  uint flags = (header >> TETRAPROBE_OCC_FACE_MASK_SHIFT) & 15u;
+  if (flags == 0u) return vis;
   ivec4 tv = tetraprobeTets[t].v, nbs = tetraprobeTets[t].n;
-  bool ownData = tetraprobeOccKind(t) != 0u;
+  bool ownData = (header & 3u) != 0u;
   vec4 o = vis;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
@@ -875,7 +876,7 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   int count = 0;
   for (int k = 0; k < 4; ++k) {
     int nb = nbs[k];
-    if (!(weights[k] < band) || nb < 0) continue;
+    if (!(weights[k] < band) || ((flags >> uint(k)) & 1u) == 0u) continue;  // a flag: nb >= 0
     if (tetraprobeOccKind(nb) ==
         0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
       bool allSeen = true;

@@ -9,7 +9,8 @@
 //                           a probe)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
 //   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 80 bytes per cell
-//   TETRAPROBE_BINDING + 4  TetraprobeCells  the sparse cell grid + BSP: a 32-byte header, then int data
+//   TETRAPROBE_BINDING + 4  TetraprobeCells  the start bricks: a 32-byte header, then int data (hash slots,
+//                           bricks of start tets)
 //   TETRAPROBE_BINDING + 5  TetraprobeOcclusion  per-tet occlusion: a 16-byte header, then uint data
 // Define the macros before including to move them (tetraprobe::levelDescriptorBindings takes the same numbers).
 #ifndef TETRAPROBE_LAYOUT_GLSL
@@ -26,12 +27,13 @@
 #define TETRAPROBE_POSITION_UINTS 3  // a probe's position in TetraprobeProbes [kGpuPositionFloatsPerProbe]
 #define TETRAPROBE_SH_UINTS 14       // a probe's ShHalf in TetraprobeProbes [kGpuShUintsPerProbe]
 #define TETRAPROBE_SH_SCALE_UINT 13  // the uint whose high half holds the probe's scale [ShHalf::h[27]]
-#define TETRAPROBE_CELL_SLOT_INTS 4  // a hash slot: key x, y, z, root [CellSlot]
-#define TETRAPROBE_BSP_NODE_INTS 6   // a BSP node: plane (4 float bits), child under, over [BspNode]
-#define TETRAPROBE_EMPTY_LEAF int(0x80000000u)  // an empty slot's key x, a leaf naming no tet [kEmptyLeaf]
+#define TETRAPROBE_CELL_SLOT_INTS 4  // a hash slot: key x, y, z, brick [CellSlot]
+#define TETRAPROBE_EMPTY_LEAF int(0x80000000u)  // an empty slot's key x [kEmptyLeaf]
 #define TETRAPROBE_OCC_RECORD_UINTS 2u          // a tet's occlusion record: header, cells [TetOcclusion]
 #define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
 #define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
+#define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: face flags [kGpuOccFaceMaskShift]
+#define TETRAPROBE_OCC_OFFSET_SHIFT 8u          // header >> it: the first plane or block [kGpuOccOffsetShift]
 #define TETRAPROBE_OCC_PLANE_UINTS 2u           // a plane: four snorm16 [OcclusionPlane]
 // snorm16 to float: the float nearest 1 / 32767 [OcclusionPlane::kOcclusionPlaneUnit]
 #define TETRAPROBE_OCC_PLANE_UNIT 3.0518509447574615e-05
@@ -87,22 +89,22 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly 
   TetraprobeOuterCell tetraprobeOuterCells[];  // offset 16
 };
 
-// The sparse cell grid + BSP (tetraprobe::GpuCellGridHeader, runtime/cell_grid.h). data[]: hash slots at 0
-// (4 ints: key x, y, z, root; key x = INT_MIN when empty), BSP nodes at tetraprobeCellNodeOffset (6 ints:
-// plane as float bits, child under, child over). A root or child < 0 is a leaf: the tet ~child, or no tet
-// when it is INT_MIN.
+// The start bricks (tetraprobe::GpuCellGridHeader, runtime/start_bricks.h). data[]: the cell grid's hash
+// slots at 0 (4 ints: key x, y, z, the cell's brick; key x = INT_MIN when empty), then from
+// tetraprobeCellBrickOffset one brick per occupied cell: tetraprobeCellBrickDim^3 start tets, sub-cell
+// (i, j, k) at i + dim * (j + dim * k).
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly buffer TetraprobeCells {
-  vec3 tetraprobeCellMin;        // offset 0, local frame, metres
-  float tetraprobeCellSize;      // offset 12, metres
-  uint tetraprobeCellSlotMask;   // offset 16: slots - 1
-  uint tetraprobeCellMaxProbe;   // offset 20: longest probe sequence; 0 = no grid
-  int tetraprobeCellNodeOffset;  // offset 24
-  int tetraprobeCellReserved;    // offset 28
-  int tetraprobeCellData[];      // offset 32
+  vec3 tetraprobeCellMin;         // offset 0, local frame, metres
+  float tetraprobeCellSize;       // offset 12, metres
+  uint tetraprobeCellSlotMask;    // offset 16: slots - 1
+  uint tetraprobeCellMaxProbe;    // offset 20: longest probe sequence; 0 = no bricks
+  int tetraprobeCellBrickOffset;  // offset 24
+  int tetraprobeCellBrickDim;     // offset 28
+  int tetraprobeCellData[];       // offset 32
 };
 
 // Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[2 t], data[2 t + 1]: tet t's
-// record (header, cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
+// record (header: kind, plane count, face flags, offset, gpu_layout.h; cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
 // tetraprobeOccShadowOffset (16 uints each, bytes little-endian). tetraprobeOccTetCount 0: no occlusion.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {
   uint tetraprobeOccTetCount;      // offset 0

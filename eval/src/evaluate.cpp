@@ -23,6 +23,7 @@
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/shade.h"
+#include "tetraprobe/runtime/start_bricks.h"
 
 namespace tetraprobe {
 
@@ -244,7 +245,8 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
       {"sh",
        level.sh.size() * sizeof(ShHalf)},  // as the file and the GPU hold them (the CPU expands to float)
       {"tets", level.tets.size() * sizeof(Tet)},
-      {"cell_grid", cellGridBytes(query.cellGrid())},
+      {"start_bricks",
+       startBricksBytes(query.cellGrid())},  // the GPU's start (the CPU's BSP is not read there)
       {"outer_cells", query.outerCells().size() * sizeof(OuterCell)},
       {"start_grid", query.startGrid().startTet.size() * sizeof(int32_t)},
   };

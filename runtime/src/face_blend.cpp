@@ -37,11 +37,56 @@ inline float trust(float blind) {
   return 1.0f - (1.0f - kFaceBlendFallbackTrust) * blind;
 }
 
+// False when tet's occlusion data leaves its probe i at visibility exactly 1.0f wherever it is evaluated
+// (occlusionVisibility), so the blend cannot move it: no data; planes whose every cell sees the probe, with
+// at most one plane (the cells' weights 1 - t and t then sum to exactly 1 in float; with more planes the sum
+// of products may round below 1); shadow maps whose map of the probe meets nothing.
+bool mayHide(const LevelOcclusion& occlusion, int32_t tet, int i) {
+  if (size_t(tet) >= occlusion.tets.size()) return false;
+  const TetOcclusion& rec = occlusion.tets[size_t(tet)];
+  if (rec.kind() == kOcclusionPlanes) {
+    const uint32_t count = rec.planeCount();
+    if (count == 0) return false;
+    if (count > 1 || size_t(rec.offset()) + count > occlusion.planes.size()) return true;
+    return ((rec.cells >> i) & 1u) == 0 || ((rec.cells >> (4 + i)) & 1u) == 0;
+  }
+  if (rec.kind() == kOcclusionShadowMaps) {
+    if ((size_t(rec.offset()) + 1) * kShadowMapBlockBytes > occlusion.shadowMaps.size()) return true;
+    const uint8_t* map = occlusion.shadowMaps.data() + size_t(rec.offset()) * kShadowMapBlockBytes +
+                         size_t(i) * kShadowMapTexels;
+    for (int b = 0; b < kShadowMapLatticeVertices; ++b)
+      if (map[b] != kShadowMapNoHit) return true;
+    return false;
+  }
+  return false;
+}
+
 }  // namespace
+
+bool faceBlendFaceFlag(const Level& level, const LevelOcclusion& occlusion, int32_t tet, int k) {
+  if (size_t(tet) >= level.tets.size()) return false;
+  const Tet& t = level.tets[size_t(tet)];
+  const int32_t nb = t.n[k];
+  if (nb < 0 || size_t(nb) >= level.tets.size()) return false;
+  const Tet& tn = level.tets[size_t(nb)];
+  for (int i = 0; i < 4; ++i) {
+    if (i == k) continue;
+    if (mayHide(occlusion, tet, i)) return true;
+    for (int j = 0; j < 4; ++j)
+      if (tn.v[j] == t.v[i] && mayHide(occlusion, nb, j)) return true;
+  }
+  return false;
+}
+
+uint32_t faceBlendMask(const Level& level, const LevelOcclusion& occlusion, int32_t tet) {
+  uint32_t mask = 0;
+  for (int k = 0; k < 4; ++k) mask |= faceBlendFaceFlag(level, occlusion, tet, k) ? 1u << k : 0u;
+  return mask;
+}
 
 glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
-                              const glm::vec3& normal) {
+                              const glm::vec3& normal, FaceBlendFaces faces) {
   const Tet& t = level.tets[size_t(tet)];
   const bool ownData = kindOf(occlusion, tet) != kOcclusionNone;
   glm::vec4 out = visibility;
@@ -56,6 +101,8 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
   for (int k = 0; k < 4; ++k) {
     const int32_t nb = t.n[k];
     if (!(weights[k] < band) || nb < 0 || size_t(nb) >= level.tets.size()) continue;
+    // Both sides see the face's probes at exactly 1 everywhere: the blend cannot change them.
+    if (faces == kFaceBlendFlaggedFaces && !faceBlendFaceFlag(level, occlusion, tet, k)) continue;
     const bool otherData = kindOf(occlusion, nb) != kOcclusionNone;
     if (!otherData) {
       // The neighbour sees every probe (trust 1): nothing to blend where this tet does too.

@@ -1,10 +1,12 @@
-// Vulkan upload of a level's tets, SH, start grid, outer cells, cell grid and occlusion into the storage
+// Vulkan upload of a level's tets, SH, start grid, outer cells, start bricks (from the cell grid) and occlusion into the storage
 // buffers shaders/tetraprobe_layout.glsl declares: packed on the host (gpu_layout.h), written into one
 // host-visible staging buffer and copied by vkCmdCopyBuffer into buffers in device-local memory (one
 // allocation per buffer), so the per-pixel reads stay on the GPU's own memory on a discrete GPU.
 #include "tetraprobe/runtime/vulkan_upload.h"
 
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/start_bricks.h"
 #include "vulkan_staging.h"
 
 #include <algorithm>
@@ -221,15 +223,34 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     }
   }
 
-  // The cell grid: every root, child and leaf entry the shader follows, in range.
+  // The cell grid: every root, child and leaf entry the brick build descends, in range and acyclic (it is not
+  // uploaded, but buildStartBricks descends it).
   {
     const auto nodeCount = int64_t(cellGrid.nodes.size());
     const auto validLeaf = [&](int32_t code) { return code == kEmptyLeaf || int64_t(~code) < tetCount; };
     const auto validChild = [&](int32_t c) { return c >= 0 ? c < nodeCount : validLeaf(c); };
     bool ok = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
     for (const CellSlot& s : cellGrid.slots) ok = ok && (s.key[0] == INT32_MIN || validChild(s.root));
-    for (const BspNode& n : cellGrid.nodes) ok = ok && validChild(n.child[0]) && validChild(n.child[1]);
+    // A child node's index is larger than its parent's (cell_grid.h): the descent ends.
+    for (int64_t i = 0; i < nodeCount; ++i)
+      for (const int32_t c : cellGrid.nodes[size_t(i)].child) ok = ok && validChild(c) && (c < 0 || c > i);
     if (!ok) {
+      if (error) *error = "cell grid has an index out of range";
+      return fail();
+    }
+  }
+  // The start bricks (start_bricks.h) from the cell grid's cells: every brick index and start tet the shader
+  // follows, in range.
+  const StartBricks bricks = buildStartBricks(level, grid, cellGrid);
+  {
+    const bool tableOk = cellGrid.slots.empty() || (cellGrid.slots.size() & (cellGrid.slots.size() - 1)) == 0;
+    const size_t perBrick = size_t(bricks.dim) * size_t(bricks.dim) * size_t(bricks.dim);
+    const auto brickCount = int64_t(perBrick == 0 ? 0 : bricks.startTet.size() / perBrick);
+    bool ok = tableOk;
+    for (const CellSlot& s : bricks.slots)
+      ok = ok && (s.key[0] == INT32_MIN || (s.root >= 0 && s.root < brickCount));
+    for (int32_t t : bricks.startTet) ok = ok && t >= 0 && t < tetCount;
+    if (!ok || bricks.slots.size() + bricks.startTet.size() > size_t(INT32_MAX / 4)) {
       if (error) *error = "cell grid has an index out of range";
       return fail();
     }
@@ -274,14 +295,15 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     appendBytes(data[kGpuBindingOuterCells], &g, 1);
   }
   GpuCellGridHeader cellHeader{};
-  for (int i = 0; i < 3; ++i) cellHeader.min[i] = cellGrid.min[i];
-  cellHeader.cellSize = cellGrid.cellSize;
-  cellHeader.slotMask = cellGrid.slots.empty() ? 0u : uint32_t(cellGrid.slots.size() - 1);
-  cellHeader.maxProbe = cellGrid.slots.empty() ? 0u : cellGrid.maxProbe;
-  cellHeader.nodeOffset = int32_t(4 * cellGrid.slots.size());
+  for (int i = 0; i < 3; ++i) cellHeader.min[i] = bricks.min[i];
+  cellHeader.cellSize = bricks.cellSize;
+  cellHeader.slotMask = bricks.slots.empty() ? 0u : uint32_t(bricks.slots.size() - 1);
+  cellHeader.maxProbe = bricks.slots.empty() ? 0u : bricks.maxProbe;
+  cellHeader.brickOffset = int32_t(4 * bricks.slots.size());
+  cellHeader.brickDim = bricks.dim;
   appendBytes(data[kGpuBindingCells], &cellHeader, 1);
-  appendBytes(data[kGpuBindingCells], cellGrid.slots.data(), cellGrid.slots.size());
-  appendBytes(data[kGpuBindingCells], cellGrid.nodes.data(), cellGrid.nodes.size());
+  appendBytes(data[kGpuBindingCells], bricks.slots.data(), bricks.slots.size());
+  appendBytes(data[kGpuBindingCells], bricks.startTet.data(), bricks.startTet.size());
 
   const LevelOcclusion& occ = level.occlusion;
   GpuOcclusionHeader occHeader{};
@@ -292,7 +314,17 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   }
   appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
   if (occHeader.tetCount > 0) {
-    appendBytes(data[kGpuBindingOcclusion], occ.tets.data(), occ.tets.size());
+    std::vector<TetOcclusion> records(occ.tets.size());
+    for (size_t t = 0; t < occ.tets.size(); ++t) {
+      if (occ.tets[t].offset() > kGpuOccMaxOffset) {
+        if (error)
+          *error = "tet " + std::to_string(t) + "'s occlusion offset is beyond the GPU record's 2^24";
+        return fail();
+      }
+      records[t] = {gpuOcclusionHeader(occ.tets[t], faceBlendMask(level, occ, int32_t(t))),
+                    occ.tets[t].cells};
+    }
+    appendBytes(data[kGpuBindingOcclusion], records.data(), records.size());
     appendBytes(data[kGpuBindingOcclusion], occ.planes.data(), occ.planes.size());
     appendBytes(data[kGpuBindingOcclusion], occ.shadowMaps.data(), occ.shadowMaps.size());
   }

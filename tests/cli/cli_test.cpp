@@ -1101,7 +1101,7 @@ TEST_F(Cli, EvalWritesGridMethodsMarkdownPlotAndTimingKeys) {
   const std::string json = slurp(path("e.json"));
   for (const char* key :
        {"\"cpu_ns_per_query\"", "\"cpu_ns_per_query_coherent\"", "\"cpu_ns_per_query_random\"", "\"threads\"",
-        "\"gpu_ms\"", "\"bytes_sections\"", "\"cell_grid\"", "\"outer_cells\"", "\"bytes_per_probe\""})
+        "\"gpu_ms\"", "\"bytes_sections\"", "\"start_bricks\"", "\"outer_cells\"", "\"bytes_per_probe\""})
     EXPECT_NE(json.find(key), std::string::npos) << "no key " << key;
   // The fallback share (a number for the tet lookup, null for methods without one), the former relative
   // errors and the points no path leaves, reported apart (docs/evaluation.md).

@@ -16,6 +16,7 @@
 #include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shade.h"
+#include "tetraprobe/runtime/start_bricks.h"
 
 namespace tetraprobe {
 namespace {
@@ -248,8 +249,10 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   EXPECT_EQ(section("positions"), level.probes.size() * 12);
   EXPECT_EQ(section("sh"), level.probes.size() * 56);  // ShHalf, as stored and uploaded
   EXPECT_EQ(section("tets"), level.tets.size() * 32);
-  EXPECT_EQ(section("cell_grid"), cellGridBytes(query.cellGrid()));
-  EXPECT_GT(section("cell_grid"), 0u);
+  // The GPU's start (start bricks), as the upload packs them: slots and one start tet a sub-cell.
+  const StartBricks bricks = buildStartBricks(level, query.startGrid(), query.cellGrid());
+  EXPECT_EQ(section("start_bricks"), bricks.slots.size() * 16 + bricks.startTet.size() * 4);
+  EXPECT_GT(section("start_bricks"), 0u);
   EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 80);
   EXPECT_GT(section("outer_cells"), 0u);
   EXPECT_EQ(section("start_grid"), query.startGrid().startTet.size() * 4);

@@ -112,6 +112,71 @@ TEST(Shade, ExplainAnswersAsIrradianceBitForBit) {
   }
 }
 
+// The face flag (faceBlendFaceFlag, packed into the GPU's occlusion record) never skips a face whose blend
+// would change the answer: at random points in every tet (weights drawn towards the faces, where the blend
+// acts; many more in tets with data on a side of a face) with random and zero normals, the flagged blend equals the blend over every face bit for bit, on the
+// closet room built with each occlusion mode (auto, planes only, shadow maps only).
+TEST(FaceBlend, FlagNeverSkipsAFaceWhoseBlendWouldChangeTheAnswer) {
+  for (const OcclusionMode mode :
+       {OcclusionMode::kAuto, OcclusionMode::kPlanes, OcclusionMode::kShadowMaps}) {
+    ClosetRoom room;
+    {
+      const SceneTracer tracer(room.scene);
+      OcclusionOptions o;
+      o.progress = false;
+      o.mode = mode;
+      room.level.occlusion = buildOcclusion(tracer, room.level, o);
+    }
+    const Level& level = room.level;
+    const LevelOcclusion& occ = level.occlusion;
+    ASSERT_FALSE(occ.empty());
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    size_t points = 0, changed = 0, dataFaces = 0, unflaggedDataFaces = 0;
+    for (size_t t = 0; t < level.tets.size(); ++t) {
+      const Tet& tet = level.tets[t];
+      const BaryFrame frame = baryFrame(tet, level.probes);
+      for (int k = 0; k < 4; ++k) {
+        const int32_t nb = tet.n[k];
+        const bool data = nb >= 0 && (occ.tets[t].kind() != kOcclusionNone ||
+                                      occ.tets[size_t(nb)].kind() != kOcclusionNone);
+        dataFaces += data;
+        unflaggedDataFaces += data && !faceBlendFaceFlag(level, occ, int32_t(t), k);
+        if (!data) {
+          EXPECT_FALSE(faceBlendFaceFlag(level, occ, int32_t(t), k)) << "tet " << t << " face " << k;
+        }
+      }
+      bool nearData = occ.tets[t].kind() != kOcclusionNone;
+      for (int k = 0; k < 4; ++k)
+        nearData = nearData || (tet.n[k] >= 0 && occ.tets[size_t(tet.n[k])].kind() != kOcclusionNone);
+      for (int s = 0; s < (nearData ? 400 : 20); ++s) {
+        glm::vec4 w;
+        for (int i = 0; i < 4; ++i) w[i] = std::pow(u(rng), 3.0f);  // many near a face
+        w /= w.x + w.y + w.z + w.w;
+        glm::vec3 x(0.0f);
+        for (int i = 0; i < 4; ++i) x += w[i] * level.probes[size_t(tet.v[i])];
+        glm::vec3 n = s % 4 == 0 ? glm::vec3(0.0f) : glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+        const glm::vec4 own = occlusionVisibility(level, occ, int32_t(t), frame, x, n);
+        const glm::vec4 flagged = faceBlendVisibility(level, occ, int32_t(t), w, own, x, n);
+        const glm::vec4 every =
+            faceBlendVisibility(level, occ, int32_t(t), w, own, x, n, kFaceBlendEveryFace);
+        ASSERT_EQ(std::memcmp(&flagged, &every, sizeof flagged), 0)
+            << "tet " << t << " point " << s << ": flagged " << flagged.x << " " << flagged.y << " "
+            << flagged.z << " " << flagged.w << ", every face " << every.x << " " << every.y << " " << every.z
+            << " " << every.w;
+        changed += flagged != own;
+        ++points;
+      }
+    }
+    std::printf(
+        "[closet room, mode %d] %zu points, %zu blended; faces with data on a side %zu, of them "
+        "unflagged %zu\n",
+        int(mode), points, changed, dataFaces, unflaggedDataFaces);
+    EXPECT_GT(changed, 1000u);  // the blend acts on these points
+  }
+}
+
 // The record is what the documented rule makes of the occlusion primitives (occlusion.h, face_blend.h),
 // computed here the long way: own visibility, the face blend, the occluded weights and both fallback shares,
 // the answer (the plain blend of the occluded weights, or occludedIrradianceAt where the fallback runs), and

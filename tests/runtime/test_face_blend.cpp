@@ -7,6 +7,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 
 #include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/occlusion.h"
@@ -98,6 +99,58 @@ TEST(FaceBlend, NothingChangesBeyondTheBandOnHullFacesOrBetweenTetsWithoutData) 
   const glm::vec4 wf(0.0f, 0.4f, 0.3f, 0.3f);
   const glm::vec4 outNone = faceBlendVisibility(level, level.occlusion, 0, wf, glm::vec4(1.0f), xf, n);
   for (int i = 0; i < 4; ++i) EXPECT_EQ(outNone[i], 1.0f);
+}
+
+// The face flag (faceBlendFaceFlag) is cleared on a face whose probes both sides see at exactly 1 wherever
+// their data is evaluated, and set where a side may hide one; where it is cleared the flagged blend equals
+// the blend over every face bit for bit, at random points on and near the face, with random normals. Three
+// cases of data on tet 0 that never hides the face's probes (slots 1..3): one plane whose cells both see them
+// (only its own probe 0 is hidden on one side), shadow maps that meet nothing from those probes, and the same
+// with tet 1 storing its own such plane.
+TEST(FaceBlend, UnflaggedFaceWithDataChangesNoVisibility) {
+  Level level = twoTets();
+  LevelOcclusion onePlane;
+  onePlane.planes.push_back(makeOcclusionPlane(1.0, -0.5, -0.5, -0.5));
+  onePlane.tets = {makeTetOcclusion(kOcclusionPlanes, 1, 0, 0xFEu), TetOcclusion{}};
+  LevelOcclusion maps;
+  maps.shadowMaps.assign(kShadowMapBlockBytes, kShadowMapNoHit);
+  for (int b = 0; b < kShadowMapLatticeVertices; ++b)
+    maps.shadowMaps[size_t(b)] = 100;  // probe 0 meets a wall
+  maps.tets = {makeTetOcclusion(kOcclusionShadowMaps, 0, 0, 0), TetOcclusion{}};
+  LevelOcclusion both = onePlane;
+  both.planes.push_back(makeOcclusionPlane(-0.5, 1.0, -0.5, -0.5));
+  both.tets[1] = makeTetOcclusion(kOcclusionPlanes, 1, 1, 0xEFu);  // tet 1's slot 0 (probe 4) hidden
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  for (const LevelOcclusion* occ : {&onePlane, &maps, &both}) {
+    level.occlusion = *occ;
+    EXPECT_FALSE(faceBlendFaceFlag(level, level.occlusion, 0, 0));
+    EXPECT_FALSE(faceBlendFaceFlag(level, level.occlusion, 1, 0));
+    EXPECT_EQ(faceBlendMask(level, level.occlusion, 0), 0u);  // faces 1..3 are on the hull
+    int moved = 0;
+    for (int s = 0; s < 2000; ++s) {
+      const int32_t tet = s % 2;
+      glm::vec4 w(std::pow(u(rng), 4.0f), u(rng), u(rng), u(rng));  // slot 0 small: near the shared face
+      w /= w.x + w.y + w.z + w.w;
+      glm::vec3 x(0.0f);
+      for (int i = 0; i < 4; ++i) x += w[i] * level.probes[size_t(level.tets[size_t(tet)].v[i])];
+      const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+      const BaryFrame f = baryFrame(level.tets[size_t(tet)], level.probes);
+      const glm::vec4 own = occlusionVisibility(level, level.occlusion, tet, f, x, n);
+      const glm::vec4 flagged = faceBlendVisibility(level, level.occlusion, tet, w, own, x, n);
+      const glm::vec4 every =
+          faceBlendVisibility(level, level.occlusion, tet, w, own, x, n, kFaceBlendEveryFace);
+      for (int i = 0; i < 4; ++i) ASSERT_EQ(flagged[i], every[i]) << "point " << s << " slot " << i;
+      moved += own != glm::vec4(1.0f);
+    }
+    EXPECT_GT(moved, 100);  // the data acts (on the probe opposite the face), just not on the face's probes
+  }
+  // A plane hiding a face probe on one side sets the flag on both.
+  level.occlusion = hideFaceProbesInTet0();
+  EXPECT_TRUE(faceBlendFaceFlag(level, level.occlusion, 0, 0));
+  EXPECT_TRUE(faceBlendFaceFlag(level, level.occlusion, 1, 0));
+  EXPECT_EQ(faceBlendMask(level, level.occlusion, 1), 1u);
 }
 
 // A tet whose own data hides all four probes (it falls back) looks for light its neighbour sees deeper in:

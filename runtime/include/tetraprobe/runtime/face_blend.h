@@ -59,13 +59,28 @@ inline constexpr float kFaceBlendBlindSum = 0.05f;      // visible weight sum fr
 inline constexpr float kFaceBlendFallbackBand = 0.3f;   // the band where the tet's own data sees nothing
                                                         // (past the centroid's 0.25: the whole tet)
 
+// Which faces the blend consults. kFaceBlendFlaggedFaces (what the lookup does, CPU and GPU): only the
+// faces faceBlendFaceFlag sets, the same answer bit for bit as kFaceBlendEveryFace (every face, the rule
+// without the flag; for tests that prove it: tests/runtime/test_face_blend.cpp).
+enum FaceBlendFaces { kFaceBlendFlaggedFaces, kFaceBlendEveryFace };
+
 // The blend above for a point at local-frame `local` (normal as occlusionVisibility takes it) inside tet
 // `tet` (a valid index; not for points outside the hull) with located weights `weights` (non-negative,
 // summing to 1) and the tet's own visibility `visibility` (occlusionVisibility). Returns `visibility`
 // unchanged where no face qualifies (every w_k at least the band). Finite for finite input.
 glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
-                              const glm::vec3& normal);
+                              const glm::vec3& normal, FaceBlendFaces faces = kFaceBlendFlaggedFaces);
+
+// The face flag, a static property of the level computed at upload (packed into the GPU's occlusion record,
+// gpu_layout.h): true when the blend across face k of `tet` may change a visibility, false where it cannot:
+// a hull face (no neighbour), or a face whose three probes both sides see at exactly 1.0 wherever their data
+// is evaluated (no data; one plane whose cells all see the probe; a shadow map of the probe that meets
+// nothing), where every target of the blend is 1 and so equals the visibility it would move. Which faces do
+// blend where the flag is set is still decided per point (the band, a neighbour without data where this tet
+// sees every probe). faceBlendMask: the four flags, bit k for face k (0 for an index out of range).
+bool faceBlendFaceFlag(const Level& level, const LevelOcclusion& occlusion, int32_t tet, int k);
+uint32_t faceBlendMask(const Level& level, const LevelOcclusion& occlusion, int32_t tet);
 
 // The visibility of the located tet's probes the run-time lookup uses (shadeLocated, shade.h;
 // tetraprobeLookupVisibility), from the tet's own `visibility` (occlusionVisibility at `local`, `normal`):

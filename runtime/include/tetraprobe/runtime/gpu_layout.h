@@ -9,6 +9,7 @@
 
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
+#include "tetraprobe/runtime/occlusion_data.h"
 #include "tetraprobe/runtime/sh.h"
 #include "tetraprobe/runtime/sh_half.h"
 
@@ -21,7 +22,7 @@ enum GpuBinding : uint32_t {
       1,                // TetraprobeProbes: positions (3 floats a probe), then SH (ShHalf: 14 uints a probe)
   kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
   kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (80 bytes each)
-  kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, nodes, leaves)
+  kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, bricks)
   kGpuBindingOcclusion =
       5,  // TetraprobeOcclusion: GpuOcclusionHeader, then uint32 data[] (records, planes, maps)
   kGpuBindingCount = 6,
@@ -79,29 +80,42 @@ static_assert(sizeof(GpuOuterCell) == 80 && offsetof(GpuOuterCell, link) == 16 &
               "TetraprobeOuterCell: std430 array stride 80");
 inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
 
-// Header of the TetraprobeCells buffer (32 bytes): the sparse cell grid + BSP of cell_grid.h. The int32
-// data[] that follows at offset 32 holds the hash slots (CellSlot, 4 ints each) from index 0, the BSP nodes
-// (BspNode, 6 ints each: plane as float bits, child under, child over) from nodeOffset. A root or child < 0
-// is a leaf: the tet ~child, or none for kEmptyLeaf (INT_MIN).
+// Header of the TetraprobeCells buffer (32 bytes): the start bricks of start_bricks.h (the cell grid's hash
+// table with a brick per occupied cell; the BSP stays on the CPU). The int32 data[] that follows at offset 32
+// holds the hash slots (CellSlot, 4 ints each: key x, y, z, the cell's brick index; key x = INT32_MIN when
+// empty) from index 0, then the bricks (brickDim^3 start tets each, x fastest) from brickOffset.
 struct GpuCellGridHeader {
-  float min[3];        // vec3 tetraprobeCellMin, local frame, metres
-  float cellSize;      // float tetraprobeCellSize, metres
-  uint32_t slotMask;   // uint tetraprobeCellSlotMask: slots - 1
-  uint32_t maxProbe;   // uint tetraprobeCellMaxProbe: 0 = no grid (the walk starts from the start grid)
-  int32_t nodeOffset;  // int tetraprobeCellNodeOffset
-  int32_t reserved;    // 0
+  float min[3];         // vec3 tetraprobeCellMin, local frame, metres
+  float cellSize;       // float tetraprobeCellSize, metres
+  uint32_t slotMask;    // uint tetraprobeCellSlotMask: slots - 1
+  uint32_t maxProbe;    // uint tetraprobeCellMaxProbe: 0 = no bricks (the walk starts from the start grid)
+  int32_t brickOffset;  // int tetraprobeCellBrickOffset: index in data[] of brick 0
+  int32_t brickDim;     // int tetraprobeCellBrickDim: sub-cells a brick edge
 };
 static_assert(std::is_standard_layout_v<GpuCellGridHeader>);
 static_assert(sizeof(GpuCellGridHeader) == 32 && offsetof(GpuCellGridHeader, cellSize) == 12 &&
-                  offsetof(GpuCellGridHeader, slotMask) == 16 && offsetof(GpuCellGridHeader, reserved) == 28,
+                  offsetof(GpuCellGridHeader, slotMask) == 16 &&
+                  offsetof(GpuCellGridHeader, brickOffset) == 24 &&
+                  offsetof(GpuCellGridHeader, brickDim) == 28,
               "TetraprobeCells header: 32 bytes, data[] at offset 32");
-static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t) && sizeof(BspNode) == 6 * sizeof(int32_t),
-              "TetraprobeCells: 4 ints a slot, 6 ints a node");
+static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t), "TetraprobeCells: 4 ints a slot");
 
 // TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
 // after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes
 // from planeOffset (2 uints each: four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the shadow-map blocks from shadowOffset (16 uints each, little-endian
 // bytes). tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
+// A tet's record on the GPU is TetOcclusion with its header repacked to hold the face flags of the blend
+// (face_blend.h, faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3),
+// face mask (4-7, bit 4 + k for face k), offset (from bit 8, so below 2^24 planes or shadow-map blocks; the
+// upload refuses more). `cells` as is.
+inline constexpr uint32_t kGpuOccFaceMaskShift = 4;
+inline constexpr uint32_t kGpuOccOffsetShift = 8;
+inline constexpr uint32_t kGpuOccMaxOffset = (1u << (32 - kGpuOccOffsetShift)) - 1u;
+inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t faceMask) {
+  return uint32_t(rec.kind()) | rec.planeCount() << 2 | (faceMask & 15u) << kGpuOccFaceMaskShift |
+         rec.offset() << kGpuOccOffsetShift;
+}
+
 struct GpuOcclusionHeader {
   uint32_t tetCount;      // uint tetraprobeOccTetCount: 0 = no occlusion
   uint32_t planeOffset;   // uint tetraprobeOccPlaneOffset

@@ -21,7 +21,7 @@ enum ShaderSpecConstant : uint32_t {
   kSpecPlanes = 1,      // bool tetraprobeUsePlanes: evaluate splitting-plane occlusion records
   kSpecShadowMaps = 2,  // bool tetraprobeUseShadowMaps: evaluate shadow-map occlusion records
   kSpecOuterCells = 3,  // bool tetraprobeUseOuterCells: continue outside the hull across the outer cells
-  kSpecCellGrid = 4,    // bool tetraprobeUseCellGrid: start walks from the sparse cell grid's BSP leaf
+  kSpecCellGrid = 4,    // bool tetraprobeUseCellGrid: start walks from the start bricks (start_bricks.h)
   kShaderSpecConstantCount = 5,
 };
 
@@ -32,7 +32,7 @@ struct ShaderVariant {
   bool planes = true;      // occlusion records of kind kOcclusionPlanes are evaluated
   bool shadowMaps = true;  // occlusion records of kind kOcclusionShadowMaps are evaluated
   bool outerCells = true;  // points outside the hull go across the outer cells (else: the clamped hull tet)
-  bool cellGrid = true;    // walks start from the cell grid's leaf (else from the coarse start grid)
+  bool cellGrid = true;    // walks start from the start bricks (else from the coarse start grid)
 
   bool operator==(const ShaderVariant&) const = default;
   // The 32-bit values of constants 0..4 in ShaderSpecConstant order (bools as 0 / 1).

@@ -62,7 +62,8 @@ struct PackedLevelBuffers {
 
 // Validates and packs `level` (tets, SH), `grid` (ProbeQuery::startGrid() of a query built on the same level)
 // and `outerCells` (ProbeQuery::outerCells(); may be empty: outside answers are then the clamped hull tet's)
-// and `cellGrid` (ProbeQuery::cellGrid(); may be empty: walks start from the start grid). Positions stay in
+// and `cellGrid` (ProbeQuery::cellGrid(); may be empty: walks start from the start grid; uploaded as the start
+// bricks buildStartBricks makes from it, start_bricks.h, not as its BSP). Positions stay in
 // the level's local frame. SH are stored as ShHalf (sh_half.h, 56 bytes a probe): a level read by loadLevel
 // or updated by setProbeSh already holds exactly those values, so GPU and CPU lookups agree bit for bit; for
 // SH set by hand, quantizeSh them first to get the same. SH that are not finite or beyond half precision's
