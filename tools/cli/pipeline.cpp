@@ -391,6 +391,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.bake.budgetPaths += more.budgetPaths;
     stats.bake.seconds += more.seconds;
     stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
+    if (!stats.bake.probeRelError.empty() || more.probeRelError.size() == added.size()) {
+      stats.bake.probeRelError.resize(level.sh.size(), -1.0f);
+      more.probeRelError.resize(added.size(), -1.0f);
+      stats.bake.probeRelError.insert(stats.bake.probeRelError.end(), more.probeRelError.begin(),
+                                      more.probeRelError.end());
+    }
     deringProbes(sh, dering);
     level.sh.insert(level.sh.end(), sh.begin(), sh.end());
     if (options.occlusion.mode != OcclusionMode::kNone) occlude();
@@ -447,6 +453,44 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stage.emplace("refine (check)", 0, "", show);
     stats.refineAfter = scoreRefinePoints(level, check);
     timer.mark("refine");
+    stage.reset();
+  }
+
+  // The SH fit (eval/sh_fit.h): the probe SH that make the lookup's answer match the traced irradiance at
+  // area-uniform surface points, pulled toward the traced values by their noise; deringed, then kept (auto)
+  // only when an independent draw of points says the level got better. Both scores are taken on the SH as
+  // saved (half precision), so the reported figures are the saved level's.
+  if (options.fit != "off" && baked && !level.tets.empty()) {
+    const int count = options.fitPoints >= 0
+                          ? options.fitPoints
+                          : std::clamp(kFitPointsPerProbe * int(probes.size() - shell.size()), kFitPointsMin,
+                                       kFitPointsMax);
+    stage.reset();
+    const std::vector<ShFitPoint> fitPoints =
+        shFitPoints(tracer, count, options.fitSamples, options.bake.seed ^ 0x5f17ull, options.bake.content,
+                    options.bake.threads, show);
+    const std::vector<ShFitPoint> holdout =
+        shFitPoints(tracer, options.fitHoldout, options.fitSamples, options.bake.seed ^ 0x401d0ull,
+                    options.bake.content, options.bake.threads, show);
+    stage.emplace("fit", 0, "", show);
+    const std::vector<ShRgb> traced = level.sh;
+    for (ShRgb& s : level.sh) s = quantizeSh(s);
+    stats.fitHoldoutPoints = holdout.size();
+    stats.fitHoldoutBefore = shFitMeanRelError(level, holdout);
+    level.sh = traced;
+    ShFitOptions fo;
+    fo.lambda = options.fitLambda;
+    fo.maxMove = options.fitMaxMove;
+    std::vector<ShRgb> fitted =
+        fitProbeSh(level, fitPoints, stats.bake.probeRelError, fo, &stats.fit, options.bake.threads);
+    deringProbes(fitted, dering);
+    for (ShRgb& s : fitted) s = quantizeSh(s);
+    level.sh = std::move(fitted);
+    stats.fitHoldoutAfter = shFitMeanRelError(level, holdout);
+    stats.fitRan = true;
+    stats.fitKept = options.fit == "on" || stats.fitHoldoutAfter < stats.fitHoldoutBefore;
+    if (!stats.fitKept) level.sh = traced;
+    timer.mark("fit");
     stage.reset();
   }
 
