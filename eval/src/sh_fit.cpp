@@ -281,21 +281,29 @@ std::vector<ShFitPoint> shFitPoints(const SceneTracer& tracer, int count, int sa
   return out;
 }
 
-double shFitMeanRelError(const Level& level, const std::vector<ShFitPoint>& points) {
-  if (points.empty() || level.tets.empty()) return 0.0;
+ShFitScore shFitScore(const Level& level, const std::vector<ShFitPoint>& points) {
+  ShFitScore score;
+  if (points.empty() || level.tets.empty()) return score;
   const double f = levelFloor(points);
+  constexpr double kGrossFloor = 0.01;  // W/m^2, as eval
   const ProbeQuery query(level);
   double sum = 0.0;
-  size_t open = 0;
+  size_t gross = 0;
   for (const ShFitPoint& p : points) {
     if (p.target == glm::vec3(0.0f)) continue;  // no path leaves: no scale to be relative to
     const glm::dvec3 x = glm::dvec3(query.irradiance(p.position, p.normal)), r = glm::dvec3(p.target);
     double e = 0.0;
     for (int c = 0; c < 3; ++c) e += std::abs(x[c] - r[c]) / std::max(r[c], f);
     sum += e / 3.0;
-    ++open;
+    const double lx = std::max(luminance(x), kGrossFloor), lr = std::max(luminance(r), kGrossFloor);
+    gross += (lx > 2.0 * lr || lx < 0.5 * lr) ? 1 : 0;
+    ++score.points;
   }
-  return open > 0 ? sum / double(open) : 0.0;
+  if (score.points > 0) {
+    score.meanRelError = sum / double(score.points);
+    score.gross = double(gross) / double(score.points);
+  }
+  return score;
 }
 
 }  // namespace tetraprobe

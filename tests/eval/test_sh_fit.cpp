@@ -142,7 +142,7 @@ TEST(ShFit, RecoversALinearFieldFromNoisyProbes) {
   Level fittedLevel = level;
   fittedLevel.sh = fitted;
   const std::vector<ShFitPoint> holdout = linearFieldPoints(1000, 3);
-  EXPECT_LT(shFitMeanRelError(fittedLevel, holdout), 0.05 * shFitMeanRelError(level, holdout));
+  EXPECT_LT(shFitScore(fittedLevel, holdout).meanRelError, 0.05 * shFitScore(level, holdout).meanRelError);
 }
 
 // The per-point lookups run on threads; the solve is serial: any thread count gives the same bits.
@@ -196,11 +196,11 @@ TEST(ShFit, LowersTheErrorAtIndependentPointsOnAClosedFormScene) {
   const std::vector<ShFitPoint> fit = floorPoints(3000, 5), holdout = floorPoints(1000, 6);
   std::vector<ShRgb> fitted = fitProbeSh(level, fit, {}, ShFitOptions{});
   deringProbes(fitted, DeringOptions{});
-  const double before = shFitMeanRelError(level, holdout);
+  const double before = shFitScore(level, holdout).meanRelError;
   for (const ShRgb& sh : fitted)
     EXPECT_GE(minShIrradiance(sh), -1e-5f * sh.c[0].x) << "a probe rings negative";
   level.sh = fitted;
-  const double after = shFitMeanRelError(level, holdout);
+  const double after = shFitScore(level, holdout).meanRelError;
   EXPECT_GT(before, 0.1) << "the traced probes must leave an error for the fit to lower";
   EXPECT_LT(after, 0.7 * before) << "before " << before << " after " << after;
   const ProbeQuery query(level);
@@ -219,7 +219,8 @@ TEST(ShFit, HoldoutScoreIsTheSavedLevelsError) {
   for (ShRgb& sh : fitted) sh = quantizeSh(sh);
   level.sh = fitted;
   const std::vector<ShFitPoint> holdout = linearFieldPoints(500, 8);
-  const double reported = shFitMeanRelError(level, holdout);
+  const ShFitScore score = shFitScore(level, holdout);
+  const double reported = score.meanRelError;
 
   const std::filesystem::path file =
       std::filesystem::temp_directory_path() / ("tetraprobe_shfit_" + std::to_string(::getpid()) + ".tpb");
@@ -234,13 +235,19 @@ TEST(ShFit, HoldoutScoreIsTheSavedLevelsError) {
     brightness += 0.2126 * p.target.x + 0.7152 * p.target.y + 0.0722 * p.target.z;
   const double f = 0.05 * brightness / double(holdout.size());
   double sum = 0.0;
+  size_t gross = 0;
+  auto lum = [](const glm::vec3& v) { return 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z; };
   for (const ShFitPoint& p : holdout) {
     const glm::vec3 x = query.irradiance(p.position, p.normal);
+    const double lx = std::max(lum(x), 0.01), lr = std::max(lum(p.target), 0.01);
+    gross += lx > 2.0 * lr || lx < 0.5 * lr ? 1 : 0;
     for (int c = 0; c < 3; ++c)
       sum += std::abs(double(x[c]) - double(p.target[c])) / std::max(double(p.target[c]), f) / 3.0;
   }
   EXPECT_NEAR(reported, sum / double(holdout.size()), 1e-9 * (1.0 + reported));
   EXPECT_GT(reported, 0.0);
+  EXPECT_EQ(score.points, holdout.size());
+  EXPECT_DOUBLE_EQ(score.gross, double(gross) / double(holdout.size()));
 }
 
 }  // namespace

@@ -243,10 +243,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (stats.fitRan)
     std::printf(
         "  fit     %s (--fit %s): %zu of %zu points fitted (%zu fall back, %zu skipped), %zu probes touched, "
-        "%zu capped; hold-out mean rel. error at %zu independent points %.4f -> %.4f\n",
+        "%zu capped; hold-out at %zu independent points: mean rel. error %.4f -> %.4f, gross %.4f -> %.4f\n",
         stats.fitKept ? "kept" : "dropped", opt.fit.c_str(), stats.fit.fitted, stats.fit.points,
         stats.fit.fallbackPoints, stats.fit.otherSkipped, stats.fit.probesTouched, stats.fit.cappedProbes,
-        stats.fitHoldoutPoints, stats.fitHoldoutBefore, stats.fitHoldoutAfter);
+        stats.fitHoldoutBefore.points, stats.fitHoldoutBefore.meanRelError,
+        stats.fitHoldoutAfter.meanRelError, stats.fitHoldoutBefore.gross, stats.fitHoldoutAfter.gross);
   if (!stats.holeRounds.empty()) {
     std::printf("  holes  ");
     for (const auto& r : stats.holeRounds)
@@ -394,9 +395,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         {"cg_iterations", {stats.fit.iterations[0], stats.fit.iterations[1], stats.fit.iterations[2]}},
         {"objective_before", stats.fit.objectiveBefore},
         {"objective_after", stats.fit.objectiveAfter},
-        {"holdout_points", stats.fitHoldoutPoints},
-        {"holdout_mean_rel_error_before", stats.fitHoldoutBefore},
-        {"holdout_mean_rel_error_after", stats.fitHoldoutAfter}};
+        {"holdout_points", stats.fitHoldoutBefore.points},
+        {"holdout_mean_rel_error_before", stats.fitHoldoutBefore.meanRelError},
+        {"holdout_mean_rel_error_after", stats.fitHoldoutAfter.meanRelError},
+        {"holdout_gross_before", stats.fitHoldoutBefore.gross},
+        {"holdout_gross_after", stats.fitHoldoutAfter.gross}};
     j["locate"] = {{"cell_size_m", grid.cellSize},
                    {"cells", gridCells},
                    {"hash_slots", grid.slots.size()},

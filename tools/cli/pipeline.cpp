@@ -432,6 +432,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   const int budget = options.probeBudget >= 0
                          ? options.probeBudget
                          : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));
+  // The refinement's traced points, which the SH fit reuses (its fit and hold-out points) when it traces its
+  // points with as many paths.
+  std::vector<RefinePoint> select, check;
   if (budget > 0 && baked) {
     RefineOptions ro;
     ro.spacing = options.spacing;
@@ -440,9 +443,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;
     ro.progress = show;  // the oracle's references, by point
-    std::vector<RefinePoint> select = refinePoints(tracer, ro);
+    select = refinePoints(tracer, ro);
     ro.seed = options.bake.seed ^ 0x7a11dull;
-    std::vector<RefinePoint> check = refinePoints(tracer, ro);
+    check = refinePoints(tracer, ro);
     stage.emplace("refine (select)", 0, "", show);
     stats.refineBefore = scoreRefinePoints(level, check);
     scoreRefinePoints(level, select);
@@ -466,17 +469,27 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
                           : std::clamp(kFitPointsPerProbe * int(probes.size() - shell.size()), kFitPointsMin,
                                        kFitPointsMax);
     stage.reset();
-    const std::vector<ShFitPoint> fitPoints =
-        shFitPoints(tracer, count, options.fitSamples, options.bake.seed ^ 0x5f17ull, options.bake.content,
-                    options.bake.threads, show);
-    const std::vector<ShFitPoint> holdout =
-        shFitPoints(tracer, options.fitHoldout, options.fitSamples, options.bake.seed ^ 0x401d0ull,
-                    options.bake.content, options.bake.threads, show);
+    // `count` points: those of `pool` first (when traced with fitSamples paths), then fresh ones.
+    auto points = [&](const std::vector<RefinePoint>& pool, int count, uint64_t seed) {
+      std::vector<ShFitPoint> out;
+      if (options.fitSamples == RefineOptions{}.samplesPerPoint)
+        for (size_t i = 0; i < pool.size() && out.size() < size_t(count); ++i)
+          out.push_back({pool[i].surface.position, pool[i].surface.normal, pool[i].reference.irradiance,
+                         pool[i].reference.stderror});
+      if (out.size() < size_t(count)) {
+        const std::vector<ShFitPoint> more =
+            shFitPoints(tracer, count - int(out.size()), options.fitSamples, seed, options.bake.content,
+                        options.bake.threads, show);
+        out.insert(out.end(), more.begin(), more.end());
+      }
+      return out;
+    };
+    const std::vector<ShFitPoint> fitPoints = points(select, count, options.bake.seed ^ 0x5f17ull);
+    const std::vector<ShFitPoint> holdout = points(check, options.fitHoldout, options.bake.seed ^ 0x401d0ull);
     stage.emplace("fit", 0, "", show);
     const std::vector<ShRgb> traced = level.sh;
     for (ShRgb& s : level.sh) s = quantizeSh(s);
-    stats.fitHoldoutPoints = holdout.size();
-    stats.fitHoldoutBefore = shFitMeanRelError(level, holdout);
+    stats.fitHoldoutBefore = shFitScore(level, holdout);
     level.sh = traced;
     ShFitOptions fo;
     fo.lambda = options.fitLambda;
@@ -486,9 +499,11 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     deringProbes(fitted, dering);
     for (ShRgb& s : fitted) s = quantizeSh(s);
     level.sh = std::move(fitted);
-    stats.fitHoldoutAfter = shFitMeanRelError(level, holdout);
+    stats.fitHoldoutAfter = shFitScore(level, holdout);
     stats.fitRan = true;
-    stats.fitKept = options.fit == "on" || stats.fitHoldoutAfter < stats.fitHoldoutBefore;
+    stats.fitKept =
+        options.fit == "on" || (stats.fitHoldoutAfter.meanRelError < stats.fitHoldoutBefore.meanRelError &&
+                                stats.fitHoldoutAfter.gross <= stats.fitHoldoutBefore.gross);
     if (!stats.fitKept) level.sh = traced;
     timer.mark("fit");
     stage.reset();

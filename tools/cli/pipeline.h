@@ -80,7 +80,7 @@ struct PipelineOptions {
 
   // Probe SH fitted to the surfaces they light (eval/sh_fit.h), after the last probe is added and traced:
   // "off", "on" (kept whatever the hold-out says) or "auto" (kept only when the hold-out points' mean
-  // relative error drops). fitPoints area-uniform surface points at fitSamples reference paths each (< 0:
+  // relative error drops and their gross error does not rise). fitPoints area-uniform surface points at fitSamples reference paths each (< 0:
   // auto, kFitPointsPerProbe per probe that is not a shell probe, within [kFitPointsMin, kFitPointsMax]);
   // fitHoldout independent points score the level before and after. Not for imported SH.
   std::string fit = "auto";
@@ -135,12 +135,11 @@ struct PipelineStats {
   // Error-driven refinement: probes added, and the error at an independent draw of points before and after.
   size_t refineProbes = 0;
   ErrorEstimate refineBefore, refineAfter;
-  // The SH fit: whether it ran and was kept, its statistics, and the hold-out points' mean relative error
-  // (shFitMeanRelError, on the SH as saved: deringed and half precision) before and after.
+  // The SH fit: whether it ran and was kept, its statistics, and the hold-out points' score (shFitScore, on
+  // the SH as saved: deringed and half precision) before and after.
   bool fitRan = false, fitKept = false;
   ShFitStats fit;
-  size_t fitHoldoutPoints = 0;
-  double fitHoldoutBefore = 0.0, fitHoldoutAfter = 0.0;
+  ShFitScore fitHoldoutBefore, fitHoldoutAfter;
 
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };

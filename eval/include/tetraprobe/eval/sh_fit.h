@@ -80,10 +80,16 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
 std::vector<ShFitPoint> shFitPoints(const SceneTracer& tracer, int count, int samples, uint64_t seed,
                                     uint32_t content, int threads = 0, bool progress = false);
 
-// The hold-out score: eval's mean_rel_error (evaluate.h: mean over points of the mean over channels of
-// |x - r| / max(r, f), f = kRelFloorFraction x the mean target luminance; points whose target is 0 in every
-// channel left out) of the level's `tet` lookup (ProbeQuery::irradiance, its stored occlusion and fallback
-// included) at `points`. 0 when no point counts.
-double shFitMeanRelError(const Level& level, const std::vector<ShFitPoint>& points);
+// The hold-out score of the level's `tet` lookup (ProbeQuery::irradiance, its stored occlusion and fallback
+// included) at `points`, as eval scores (evaluate.h), over the points whose target is not 0 in every channel:
+//   meanRelError = mean over points of the mean over channels of |x - r| / max(r, f), f = kRelFloorFraction x
+//   the mean target luminance;  gross = the fraction with lum(x) > 2 lum(r) or < lum(r) / 2 (luminances
+//   floored at 0.01 W/m^2). Zeros when no point counts.
+struct ShFitScore {
+  size_t points = 0;  // points that count
+  double meanRelError = 0.0;
+  double gross = 0.0;
+};
+ShFitScore shFitScore(const Level& level, const std::vector<ShFitPoint>& points);
 
 }  // namespace tetraprobe
