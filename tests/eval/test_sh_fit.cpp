@@ -194,7 +194,9 @@ TEST(ShFit, LowersTheErrorAtIndependentPointsOnAClosedFormScene) {
     return pts;
   };
   const std::vector<ShFitPoint> fit = floorPoints(3000, 5), holdout = floorPoints(1000, 6);
-  std::vector<ShRgb> fitted = fitProbeSh(level, fit, {}, ShFitOptions{});
+  ShFitOptions o;
+  o.maxMove = 1.0;  // the peak needs the probes near it to move far
+  std::vector<ShRgb> fitted = fitProbeSh(level, fit, {}, o);
   deringProbes(fitted, DeringOptions{});
   const double before = shFitScore(level, holdout).meanRelError;
   for (const ShRgb& sh : fitted)
@@ -208,6 +210,29 @@ TEST(ShFit, LowersTheErrorAtIndependentPointsOnAClosedFormScene) {
     const glm::vec3 e = query.irradiance(holdout[i].position, unitNormal(i));
     EXPECT_GE(std::min({e.x, e.y, e.z}), 0.0f);
   }
+}
+
+// How far a probe may move: per channel, the RMS over normals of its irradiance change is at most maxMove x
+// its mean irradiance (every probe here is far brighter than the floor f), whatever the data ask for.
+TEST(ShFit, NoProbeMovesFurtherThanTheCap) {
+  const Level level = noisyLinearLevel();
+  ShFitOptions o;
+  o.lambda = 0.0;
+  o.maxMove = 0.02;
+  ShFitStats stats;
+  const std::vector<ShRgb> fitted = fitProbeSh(level, linearFieldPoints(2000, 9), {}, o, &stats);
+  EXPECT_GT(stats.cappedProbes, 0u);
+  for (size_t j = 0; j < fitted.size(); ++j)
+    for (int c = 0; c < 3; ++c) {
+      double ms = 0.0;
+      for (int k = 0; k < kShCoeffCount; ++k) {
+        const double d =
+            shCosineLobe(k) * (double(fitted[j].c[size_t(k)][c]) - double(level.sh[j].c[size_t(k)][c]));
+        ms += d * d / (4.0 * std::numbers::pi);
+      }
+      const double mean = std::numbers::pi * sh_const::kY00 * double(level.sh[j].c[0][c]);
+      EXPECT_LE(std::sqrt(ms), o.maxMove * mean * (1.0 + 1e-4)) << "probe " << j << " channel " << c;
+    }
 }
 
 // The bake reports the hold-out error of the SH it saves (deringed, half precision). Saved and loaded back,

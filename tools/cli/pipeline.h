@@ -84,8 +84,8 @@ struct PipelineOptions {
   // auto, kFitPointsPerProbe per probe that is not a shell probe, within [kFitPointsMin, kFitPointsMax]);
   // fitHoldout independent points score the level before and after. Not for imported SH.
   std::string fit = "auto";
-  double fitLambda = 1.0;   // ShFitOptions::lambda
-  double fitMaxMove = 1.0;  // ShFitOptions::maxMove
+  double fitLambda = 0.3;   // ShFitOptions::lambda
+  double fitMaxMove = 0.3;  // ShFitOptions::maxMove
   int fitPoints = -1;
   int fitSamples = 256;
   int fitHoldout = 2048;
@@ -147,7 +147,7 @@ struct PipelineStats {
 // The SH fit's automatic point count (PipelineOptions::fitPoints < 0).
 inline constexpr int kFitPointsPerProbe = 6;
 inline constexpr int kFitPointsMin = 2048;
-inline constexpr int kFitPointsMax = 32768;
+inline constexpr int kFitPointsMax = 16384;
 
 // The default finest probe spacing for `scene` (bake --spacing auto): 1 m, the scale of gameplay space, or
 // for a scene whose bounds' largest extent is under 8 m the largest power of two of a metre with at least 8

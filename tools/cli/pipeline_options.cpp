@@ -140,7 +140,7 @@ std::vector<OptionSpec> bakeOptionSpecs() {
       {"--fit-max-move", "", "F", "fit: a probe's RMS irradiance change at most F x its mean irradiance",
        def("--fit-max-move")},
       {"--fit-points", "", "N|auto",
-       "fit: area-uniform surface points (auto = 6 per probe that is not a shell probe, 2048 to 32768)",
+       "fit: area-uniform surface points (auto = 6 per probe that is not a shell probe, 2048 to 16384)",
        def("--fit-points")},
       {"--fit-samples", "", "N", "fit: reference paths per fit and hold-out point", def("--fit-samples")},
       {"--fit-holdout", "", "N", "fit: independent points scoring the level before and after",

@@ -49,7 +49,7 @@ struct ShFitOptions {
   double lambda = 1.0;            // weight of the pull toward the traced SH; >= 0 (infinite: x = x0)
   double probeRelFloor = 0.02;    // sd_j's relative noise at least this (a converged probe is not exact)
   double unknownRelError = 0.05;  // probes with no noise estimate (probeRelError < 0 or missing)
-  double maxMove = 1.0;           // cap on a probe's RMS irradiance change, x max(its irradiance, f)
+  double maxMove = 0.3;           // cap on a probe's RMS irradiance change, x max(its irradiance, f)
   int maxIterations = 400;        // conjugate-gradient iterations per channel
   double tolerance = 1e-6;        // stop when the preconditioned residual falls below this x its start
 };
