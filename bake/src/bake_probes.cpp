@@ -513,6 +513,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       stats->paths += uint64_t(n);
       stats->maxPathsPerProbe = std::max(stats->maxPathsPerProbe, n);
     }
+    stats->probeRelError.assign(achieved.begin(), achieved.end());
     achieved.erase(std::remove(achieved.begin(), achieved.end(), -1.0), achieved.end());
     if (!achieved.empty()) {
       std::vector<double> sorted = achieved;

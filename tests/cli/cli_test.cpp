@@ -1195,7 +1195,8 @@ TEST_F(Cli, LevelRebakesFromItsOwnGeneratorByteForByte) {
        {"--spacing=0.7 ", "--samples=32 ", "--noise=0.02 ", "--path-budget=300000 ",
         "--seed=18446744073709551615 ", "--dering=0.3 ", "--min-agreement=0.97 ", "--fill-holes=3 ",
         "--probe-budget=auto ", "--refine-points=256 ", "--max-spacing=10 ", "--filler-spacing=4 ",
-        "--shell-spacing=auto ", "--refine-offset=auto"})
+        "--shell-spacing=auto ", "--refine-offset=auto ", "--fit=auto ", "--fit-lambda=0.3 ",
+        "--fit-max-move=0.3 ", "--fit-points=auto "})
     EXPECT_NE(generator.find(item), std::string::npos) << item << " missing from: " << generator;
   EXPECT_EQ(generator.find("thread"), std::string::npos) << generator;
   EXPECT_EQ(generator.find(dir_.string()), std::string::npos) << "a path in the generator: " << generator;

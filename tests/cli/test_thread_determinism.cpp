@@ -1,5 +1,5 @@
 // `--threads` never changes the level: the bundled sample baked at 1, 2 and 4 threads gives identical bytes,
-// through every threaded stage (placement, path tracing, occlusion, hole filling, refinement, the cell grid).
+// through every threaded stage (placement, path tracing, occlusion, hole filling, refinement, the SH fit, the cell grid).
 // Embree's BVH is built on one thread (bake/src/tracer.cpp) so its layout, which decides ties between equally
 // near hits, cannot depend on the machine or the option. Small sample counts: about 1.5 s a bake.
 #include <gtest/gtest.h>
@@ -28,9 +28,10 @@ TEST(ThreadDeterminism, SampleBakesToIdenticalBytesAtOneTwoAndFourThreads) {
   const fs::path dir = fs::temp_directory_path() / ("tetraprobe_threads_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string scene = std::string(TETRAPROBE_SOURCE_DIR) + "/samples/two_rooms/two_rooms.scene.json";
-  const std::string base = std::string(TETRAPROBE_CLI) + " bake " + scene +
-                           " --spacing 1 --samples 16 --noise 0 --fill-holes 1 --probe-budget 32"
-                           " --refine-points 128";
+  const std::string base =
+      std::string(TETRAPROBE_CLI) + " bake " + scene +
+      " --spacing 1 --samples 16 --noise 0 --fill-holes 1 --probe-budget 32"
+      " --refine-points 128 --fit on --fit-points 256 --fit-holdout 128 --fit-samples 32";
   std::string bytes[3];
   const int threads[3] = {1, 2, 4};
   for (int i = 0; i < 3; ++i) {

@@ -253,6 +253,14 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         "%.4f\n",
         stats.refineProbes, stats.refineBefore.points, stats.refineBefore.meanLogError,
         stats.refineAfter.meanLogError, stats.refineBefore.gross, stats.refineAfter.gross);
+  if (stats.fitRan)
+    std::printf(
+        "  fit     %s (--fit %s): %zu of %zu points fitted (%zu fall back, %zu skipped), %zu probes touched, "
+        "%zu capped; hold-out at %zu independent points: mean rel. error %.4f -> %.4f, gross %.4f -> %.4f\n",
+        stats.fitKept ? "kept" : "dropped", opt.fit.c_str(), stats.fit.fitted, stats.fit.points,
+        stats.fit.fallbackPoints, stats.fit.otherSkipped, stats.fit.probesTouched, stats.fit.cappedProbes,
+        stats.fitHoldoutBefore.points, stats.fitHoldoutBefore.meanRelError,
+        stats.fitHoldoutAfter.meanRelError, stats.fitHoldoutBefore.gross, stats.fitHoldoutAfter.gross);
   if (!stats.holeRounds.empty()) {
     std::printf("  holes  ");
     for (const auto& r : stats.holeRounds)
@@ -403,6 +411,26 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                    {"mean_log2_error_after", stats.refineAfter.meanLogError},
                    {"gross_before", stats.refineBefore.gross},
                    {"gross_after", stats.refineAfter.gross}};
+    j["fit"] = {
+        {"mode", opt.fit},
+        {"ran", stats.fitRan},
+        {"kept", stats.fitKept},
+        {"lambda", opt.fitLambda},
+        {"max_move", opt.fitMaxMove},
+        {"points", stats.fit.points},
+        {"fitted_points", stats.fit.fitted},
+        {"fallback_points", stats.fit.fallbackPoints},
+        {"skipped_points", stats.fit.otherSkipped},
+        {"probes_touched", stats.fit.probesTouched},
+        {"capped_probes", stats.fit.cappedProbes},
+        {"cg_iterations", {stats.fit.iterations[0], stats.fit.iterations[1], stats.fit.iterations[2]}},
+        {"objective_before", stats.fit.objectiveBefore},
+        {"objective_after", stats.fit.objectiveAfter},
+        {"holdout_points", stats.fitHoldoutBefore.points},
+        {"holdout_mean_rel_error_before", stats.fitHoldoutBefore.meanRelError},
+        {"holdout_mean_rel_error_after", stats.fitHoldoutAfter.meanRelError},
+        {"holdout_gross_before", stats.fitHoldoutBefore.gross},
+        {"holdout_gross_after", stats.fitHoldoutAfter.gross}};
     j["locate"] = {{"cell_size_m", grid.cellSize},
                    {"cells", gridCells},
                    {"hash_slots", grid.slots.size()},

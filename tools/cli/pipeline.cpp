@@ -464,6 +464,12 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.bake.budgetPaths += more.budgetPaths;
     stats.bake.seconds += more.seconds;
     stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
+    if (!stats.bake.probeRelError.empty() || more.probeRelError.size() == added.size()) {
+      stats.bake.probeRelError.resize(level.sh.size(), -1.0f);
+      more.probeRelError.resize(added.size(), -1.0f);
+      stats.bake.probeRelError.insert(stats.bake.probeRelError.end(), more.probeRelError.begin(),
+                                      more.probeRelError.end());
+    }
     deringProbes(sh, dering);
     level.sh.insert(level.sh.end(), sh.begin(), sh.end());
     occlusionStale = options.occlusion.mode != OcclusionMode::kNone;
@@ -514,6 +520,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
           stats.lateRemovedHole += kinds[i] == LevelProbeKind::kHole;
           stats.lateRemovedRefinement += kinds[i] == LevelProbeKind::kRefinement;
         }
+        // The bake's per-probe noise (the SH fit's pull) follows its probes.
+        std::vector<float>& noise = stats.bake.probeRelError;
+        const bool perProbeNoise = noise.size() == probes.size();
         size_t w = 0;
         for (size_t i = 0; i < probes.size(); ++i) {
           if (drop[i]) continue;
@@ -522,8 +531,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
           spacing[w] = spacing[i];
           level.probes[w] = level.probes[i];
           level.sh[w] = level.sh[i];
+          if (perProbeNoise) noise[w] = noise[i];
           ++w;
         }
+        if (perProbeNoise) noise.resize(w);
         probes.resize(w);
         kinds.resize(w);
         spacing.resize(w);
@@ -580,6 +591,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   const int budget = options.probeBudget >= 0
                          ? options.probeBudget
                          : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));
+  // The refinement's traced points, which the SH fit reuses (its fit and hold-out points) when it traces its
+  // points with as many paths.
+  std::vector<RefinePoint> select, check;
   if (budget > 0 && baked) {
     RefineOptions ro;
     ro.spacing = options.spacing;
@@ -588,9 +602,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;
     ro.progress = show;  // the oracle's references, by point
-    std::vector<RefinePoint> select = refinePoints(tracer, ro);
+    select = refinePoints(tracer, ro);
     ro.seed = options.bake.seed ^ 0x7a11dull;
-    std::vector<RefinePoint> check = refinePoints(tracer, ro);
+    check = refinePoints(tracer, ro);
     stage.emplace("refine (select)", 0, "", show);
     stats.refineBefore = scoreRefinePoints(level, check);
     scoreRefinePoints(level, select);
@@ -607,6 +621,56 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stage.reset();
   }
   if (!lateDone) latePass();
+
+  // The SH fit (eval/sh_fit.h): the probe SH that make the lookup's answer match the traced irradiance at
+  // area-uniform surface points, pulled toward the traced values by their noise; deringed, then kept (auto)
+  // only when an independent draw of points says the level got better. Both scores are taken on the SH as
+  // saved (half precision), so the reported figures are the saved level's.
+  if (options.fit != "off" && baked && !level.tets.empty()) {
+    const int count = options.fitPoints >= 0
+                          ? options.fitPoints
+                          : std::clamp(kFitPointsPerProbe * int(probes.size() - shell.size()), kFitPointsMin,
+                                       kFitPointsMax);
+    stage.reset();
+    // `count` points: those of `pool` first (when traced with fitSamples paths), then fresh ones.
+    auto points = [&](const std::vector<RefinePoint>& pool, int count, uint64_t seed) {
+      std::vector<ShFitPoint> out;
+      if (options.fitSamples == RefineOptions{}.samplesPerPoint)
+        for (size_t i = 0; i < pool.size() && out.size() < size_t(count); ++i)
+          out.push_back({pool[i].surface.position, pool[i].surface.normal, pool[i].reference.irradiance,
+                         pool[i].reference.stderror});
+      if (out.size() < size_t(count)) {
+        const std::vector<ShFitPoint> more =
+            shFitPoints(tracer, count - int(out.size()), options.fitSamples, seed, options.bake.content,
+                        options.bake.threads, show);
+        out.insert(out.end(), more.begin(), more.end());
+      }
+      return out;
+    };
+    const std::vector<ShFitPoint> fitPoints = points(select, count, options.bake.seed ^ 0x5f17ull);
+    const std::vector<ShFitPoint> holdout = points(check, options.fitHoldout, options.bake.seed ^ 0x401d0ull);
+    stage.emplace("fit", 0, "", show);
+    const std::vector<ShRgb> traced = level.sh;
+    for (ShRgb& s : level.sh) s = quantizeSh(s);
+    stats.fitHoldoutBefore = shFitScore(level, holdout);
+    level.sh = traced;
+    ShFitOptions fo;
+    fo.lambda = options.fitLambda;
+    fo.maxMove = options.fitMaxMove;
+    std::vector<ShRgb> fitted =
+        fitProbeSh(level, fitPoints, stats.bake.probeRelError, fo, &stats.fit, options.bake.threads);
+    deringProbes(fitted, dering);
+    for (ShRgb& s : fitted) s = quantizeSh(s);
+    level.sh = std::move(fitted);
+    stats.fitHoldoutAfter = shFitScore(level, holdout);
+    stats.fitRan = true;
+    stats.fitKept =
+        options.fit == "on" || (stats.fitHoldoutAfter.meanRelError < stats.fitHoldoutBefore.meanRelError &&
+                                stats.fitHoldoutAfter.gross <= stats.fitHoldoutBefore.gross);
+    if (!stats.fitKept) level.sh = traced;
+    timer.mark("fit");
+    stage.reset();
+  }
 
   // What the user gets: the surface points of the finished level (after hole filling and refinement, which
   // both re-tetrahedralize) that still see none of their tet's probes, on a draw of their own. Reported only.

@@ -10,6 +10,7 @@
 
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/eval/refine.h"
+#include "tetraprobe/eval/sh_fit.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/scene/scene.h"
@@ -92,6 +93,18 @@ struct PipelineOptions {
   // kRefineOffsetFraction (refine.h).
   double refineOffset = 0.0;
 
+  // Probe SH fitted to the surfaces they light (eval/sh_fit.h), after the last probe is added and traced:
+  // "off", "on" (kept whatever the hold-out says) or "auto" (kept only when the hold-out points' mean
+  // relative error drops and their gross error does not rise). fitPoints area-uniform surface points at fitSamples reference paths each (< 0:
+  // auto, kFitPointsPerProbe per probe that is not a shell probe, within [kFitPointsMin, kFitPointsMax]);
+  // fitHoldout independent points score the level before and after. Not for imported SH.
+  std::string fit = "auto";
+  double fitLambda = 0.3;   // ShFitOptions::lambda
+  double fitMaxMove = 0.3;  // ShFitOptions::maxMove
+  int fitPoints = -1;
+  int fitSamples = 256;
+  int fitHoldout = 2048;
+
   // Sharded bake (docs/distributed.md; bake.h, bakeProbesShard). shardCount > 0: buildLevel places the
   // probes, runs bake passes 1-2 for shard shardIndex's probes (shardOwnership), stores their states in
   // *shardOut and returns the level as it stands then (probes and tets, no SH). `merged`: every probe's
@@ -150,9 +163,19 @@ struct PipelineStats {
   // Error-driven refinement: probes added, and the error at an independent draw of points before and after.
   size_t refineProbes = 0;
   ErrorEstimate refineBefore, refineAfter;
+  // The SH fit: whether it ran and was kept, its statistics, and the hold-out points' score (shFitScore, on
+  // the SH as saved: deringed and half precision) before and after.
+  bool fitRan = false, fitKept = false;
+  ShFitStats fit;
+  ShFitScore fitHoldoutBefore, fitHoldoutAfter;
 
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds, in order
 };
+
+// The SH fit's automatic point count (PipelineOptions::fitPoints < 0).
+inline constexpr int kFitPointsPerProbe = 6;
+inline constexpr int kFitPointsMin = 2048;
+inline constexpr int kFitPointsMax = 16384;
 
 // The default finest probe spacing for `scene` (bake --spacing auto): 1 m, the scale of gameplay space, or
 // for a scene whose bounds' largest extent is under 8 m the largest power of two of a metre with at least 8

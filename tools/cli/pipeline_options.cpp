@@ -147,6 +147,21 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "hole and refinement probes; auto = that worst (on some levels it drops most of those probes and "
        "their accuracy: docs/occlusion.md)",
        def("--late-min-dihedral")},
+      {"--fit", "", "auto|on|off",
+       "fit the probe SH to the traced irradiance of surface points (least squares through the lookup's own "
+       "weights, pulled toward the traced values; docs/accuracy.md): on = always, auto = kept only when the "
+       "error at independent points drops, off = the traced SH",
+       def("--fit")},
+      {"--fit-lambda", "", "F", "fit: weight of the pull toward each probe's traced SH (by its noise)",
+       def("--fit-lambda")},
+      {"--fit-max-move", "", "F", "fit: a probe's RMS irradiance change at most F x its mean irradiance",
+       def("--fit-max-move")},
+      {"--fit-points", "", "N|auto",
+       "fit: area-uniform surface points (auto = 6 per probe that is not a shell probe, 2048 to 16384)",
+       def("--fit-points")},
+      {"--fit-samples", "", "N", "fit: reference paths per fit and hold-out point", def("--fit-samples")},
+      {"--fit-holdout", "", "N", "fit: independent points scoring the level before and after",
+       def("--fit-holdout")},
       {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)",
        std::to_string(PipelineOptions{}.bake.threads)},
       {"--shard", "", "I/N",
@@ -266,6 +281,21 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
       throw UsageError("--late-min-dihedral must be auto or a number of degrees in [0, 70)");
   }
   if (opt.lateFillers < 0) throw UsageError("--late-fillers must be >= 0");
+  opt.fit = args.str("--fit");
+  if (opt.fit != "auto" && opt.fit != "on" && opt.fit != "off")
+    throw UsageError("--fit must be auto, on or off, not '" + opt.fit + "'");
+  opt.fitLambda = args.number("--fit-lambda");
+  if (!(opt.fitLambda >= 0.0) || !std::isfinite(opt.fitLambda))
+    throw UsageError("--fit-lambda must be a finite number >= 0");
+  opt.fitMaxMove = args.number("--fit-max-move");
+  if (!(opt.fitMaxMove >= 0.0) || !std::isfinite(opt.fitMaxMove))
+    throw UsageError("--fit-max-move must be a finite number >= 0");
+  opt.fitPoints = args.str("--fit-points") == "auto" ? -1 : args.integer("--fit-points");
+  if (opt.fitPoints < -1) throw UsageError("--fit-points must be auto or >= 0");
+  opt.fitSamples = args.integer("--fit-samples");
+  if (opt.fitSamples < 1) throw UsageError("--fit-samples must be >= 1");
+  opt.fitHoldout = args.integer("--fit-holdout");
+  if (opt.fitHoldout < 1) throw UsageError("--fit-holdout must be >= 1");
   if (opt.holeRounds < 0 || opt.holeRounds > 16) throw UsageError("--fill-holes must be in [0, 16]");
   if (!(opt.occlusion.minAgreement >= 0.0 && opt.occlusion.minAgreement <= 1.0))
     throw UsageError("--min-agreement must be in [0, 1]");
@@ -307,6 +337,12 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--late-slivers", o.lateSlivers ? "fix" : "keep");
   add("--late-fillers", std::to_string(o.lateFillers));
   add("--late-min-dihedral", o.lateMinDihedral < 0.0 ? "auto" : exactNumber(o.lateMinDihedral));
+  add("--fit", o.fit);
+  add("--fit-lambda", exactNumber(o.fitLambda));
+  add("--fit-max-move", exactNumber(o.fitMaxMove));
+  add("--fit-points", o.fitPoints < 0 ? "auto" : std::to_string(o.fitPoints));
+  add("--fit-samples", std::to_string(o.fitSamples));
+  add("--fit-holdout", std::to_string(o.fitHoldout));
   return v;
 }
 

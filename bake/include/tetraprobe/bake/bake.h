@@ -63,6 +63,10 @@ struct BakeStats {
   // cap above the target.
   double meanRelError = 0.0, p95RelError = 0.0, maxRelError = 0.0;
   size_t probesAtCap = 0;
+  // Adaptive sampling only (empty otherwise): per probe, by index, the achieved relative standard error as
+  // above (infinite when it could not be estimated), -1 for a skipped probe. The SH fit
+  // (eval/sh_fit.h) weights its pull toward each probe's traced value by it.
+  std::vector<float> probeRelError;
   uint64_t budgetPaths = 0;  // paths spent from BakeOptions::pathBudget beyond the per-probe caps
   uint64_t rays() const { return intersectRays + occludedRays; }
   double raysPerSecond() const { return seconds > 0.0 ? double(rays()) / seconds : 0.0; }
