@@ -93,6 +93,9 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
     return out;
   }
   const double f = levelFloor(points);
+  // An L1 level's coefficients 4..8 are zero and stay so: with no point's row reaching them, their right-hand
+  // side is 0 and conjugate gradients never move them off x0.
+  const int fittedCoeffs = level.shOrder == 1 ? 4 : kShCoeffCount;
 
   // The lookup's coefficients at every point (parallel, written by index).
   std::vector<Row> rows(points.size());
@@ -119,7 +122,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
           const auto y = shBasis<double>(p.normal.x, p.normal.y, p.normal.z);
           for (int s = 0; s < 4; ++s) {
             r.probe[s] = tet.v[s];
-            for (int k = 0; k < kShCoeffCount; ++k)
+            for (int k = 0; k < fittedCoeffs; ++k)
               r.a[s][k] = double(record.weights[s]) * shCosineLobe(k) * y[size_t(k)];
           }
           r.target = glm::dvec3(p.target);

@@ -156,6 +156,41 @@ TEST(ShFit, SameBitsForAnyThreadCount) {
     for (int k = 0; k < kShCoeffCount; ++k) EXPECT_EQ(one[j].c[size_t(k)], four[j].c[size_t(k)]);
 }
 
+// An L1 level (Level::shOrder 1: coefficients 4..8 zero, as the file format requires) stays one: the fit
+// moves only coefficients 0..3, and still recovers the L1 part of a field linear in position from noisy
+// probes (targets from the L1-truncated field, so that L1 probes can represent them exactly).
+TEST(ShFit, L1LevelKeepsItsL2CoefficientsZero) {
+  Level level = noisyLinearLevel();
+  level.shOrder = 1;
+  truncateShOrder(level.sh, 1);
+  std::vector<ShFitPoint> pts = linearFieldPoints(3000, 6);
+  for (ShFitPoint& p : pts) {
+    std::vector<ShRgb> one{linearField(p.position)};
+    truncateShOrder(one, 1);
+    p.target = shIrradiance(one[0], p.normal);
+  }
+  ShFitOptions o;
+  o.lambda = 1e-3;
+  const std::vector<ShRgb> fitted = fitProbeSh(level, pts, {}, o);
+  ASSERT_EQ(fitted.size(), level.sh.size());
+  bool moved = false;
+  for (size_t j = 0; j < fitted.size(); ++j) {
+    for (int k = 4; k < kShCoeffCount; ++k)
+      EXPECT_EQ(fitted[j].c[size_t(k)], glm::vec3(0.0f)) << "probe " << j;
+    for (int k = 0; k < 4; ++k) moved = moved || fitted[j].c[size_t(k)] != level.sh[j].c[size_t(k)];
+  }
+  EXPECT_TRUE(moved);
+  Level fittedLevel = level;
+  fittedLevel.sh = fitted;
+  std::vector<ShFitPoint> holdout = linearFieldPoints(1000, 7);
+  for (ShFitPoint& p : holdout) {
+    std::vector<ShRgb> one{linearField(p.position)};
+    truncateShOrder(one, 1);
+    p.target = shIrradiance(one[0], p.normal);
+  }
+  EXPECT_LT(shFitScore(fittedLevel, holdout).meanRelError, 0.2 * shFitScore(level, holdout).meanRelError);
+}
+
 // A point light of intensity I 1 m above a black floor (no sky, no bounce): the floor's irradiance is the
 // closed form I h / r^3, a peak far narrower than the 2 m probe grid above and below the light resolves. With
 // that as the target at points on the floor, the fit lowers the error at independent floor points, and after

@@ -360,8 +360,11 @@ TEST(Occlusion, TwoRoomsDarkSideIgnoresLitProbes) {
 bool sameOcclusion(const LevelOcclusion& a, const LevelOcclusion& b) {
   if (a.tets.size() != b.tets.size() || a.planes.size() != b.planes.size() || a.shadowMaps != b.shadowMaps)
     return false;
-  return std::memcmp(a.tets.data(), b.tets.data(), a.tets.size() * sizeof(TetOcclusion)) == 0 &&
-         std::memcmp(a.planes.data(), b.planes.data(), a.planes.size() * sizeof(OcclusionPlane)) == 0;
+  // Empty arrays have null data(), which memcmp may not be given (UBSan), whatever the size.
+  return (a.tets.empty() ||
+          std::memcmp(a.tets.data(), b.tets.data(), a.tets.size() * sizeof(TetOcclusion)) == 0) &&
+         (a.planes.empty() ||
+          std::memcmp(a.planes.data(), b.planes.data(), a.planes.size() * sizeof(OcclusionPlane)) == 0);
 }
 bool sameStats(const OcclusionStats& a, const OcclusionStats& b) {
   return a.tets == b.tets && a.tetsWithGeometry == b.tetsWithGeometry && a.none == b.none &&
