@@ -238,10 +238,18 @@ int tetraprobeFindOuterCell(int t, int f) {
              : -1;
 }
 
+// decodeOctNormal (runtime/oct_normal.h): two int16 in units of 2^-15, unfolded below the equator; exact up
+// to the normalize (every value a multiple of 2^-15 in [-1, 1]), so the C++ decode agrees to a few ulp.
+vec3 tetraprobeOctDecode(uint code) {
+  vec2 e = vec2(float(int(code << 16u) >> 16), float(int(code) >> 16)) * (1.0 / 32768.0);
+  float z = 1.0 - abs(e.x) - abs(e.y);
+  if (z < 0.0) e = (1.0 - abs(e.yx)) * sign(e);
+  return normalize(vec3(e, z));
+}
+
 // Unit vertex normal i (0..2) of outer cell k.
 vec3 tetraprobeOuterNormal(int k, int i) {
-  return vec3(tetraprobeOuterCells[k].n[3 * i], tetraprobeOuterCells[k].n[3 * i + 1],
-              tetraprobeOuterCells[k].n[3 * i + 2]);
+  return tetraprobeOctDecode(tetraprobeOuterCells[k].n[i]);
 }
 
 // x strictly beyond the plane of cell k's hull triangle (outward winding).

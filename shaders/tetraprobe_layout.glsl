@@ -8,7 +8,7 @@
 //   TETRAPROBE_BINDING + 1  TetraprobeProbes  positions (3 floats a probe), then SH (tetraprobe::ShHalf, 14 uints
 //                           a probe)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
-//   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 80 bytes per cell
+//   TETRAPROBE_BINDING + 3  TetraprobeOuterCells  the outer cells: a 16-byte header, then 48 bytes per cell
 //   TETRAPROBE_BINDING + 4  TetraprobeCells  the start bricks: a 32-byte header, then int data (hash slots,
 //                           bricks of start tets)
 //   TETRAPROBE_BINDING + 5  TetraprobeOcclusion  per-tet occlusion: a 16-byte header, then uint data
@@ -78,10 +78,10 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 2) readonly 
 // opposite v[i] (-1 if none), link.w: the index in the tet's v of the vertex opposite the hull face. Sorted
 // by (hull tet, face).
 struct TetraprobeOuterCell {
-  ivec4 v;       // offset 0: v[0..2] probe indices (positions in TetraprobeProbes), v[3] the hull tet
-  ivec4 link;    // offset 16: link[0..2] the cells across the edges, link[3] the hull tet's face
-  float n[9];    // offset 32: unit vertex normals of v[0..2], x y z each
-  float pad[3];  // offset 68; 80 bytes in all
+  ivec4 v;     // offset 0: v[0..2] probe indices (positions in TetraprobeProbes), v[3] the hull tet
+  ivec4 link;  // offset 16: link[0..2] the cells across the edges, link[3] the hull tet's face
+  uvec4 n;     // offset 32: n.xyz octahedral codes of the normals of v[0..2] (tetraprobeOctDecode), n.w 0;
+               // 48 bytes in all
 };
 
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly buffer TetraprobeOuterCells {

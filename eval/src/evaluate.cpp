@@ -19,6 +19,7 @@
 #include "tetraprobe/eval/nearest_probe.h"
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
+#include "tetraprobe/runtime/gpu_layout.h"
 #include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
@@ -247,7 +248,7 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
       {"tets", level.tets.size() * sizeof(Tet)},
       {"start_bricks",
        startBricksBytes(query.cellGrid())},  // the GPU's start (the CPU's BSP is not read there)
-      {"outer_cells", query.outerCells().size() * sizeof(OuterCell)},
+      {"outer_cells", query.outerCells().size() * sizeof(GpuOuterCell)},
       {"start_grid", query.startGrid().startTet.size() * sizeof(int32_t)},
   };
   if (occlusion) out.push_back({"occlusion", level.occlusion.bytes()});

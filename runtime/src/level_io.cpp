@@ -16,10 +16,13 @@
 #include <string>
 #include <utility>
 
+#include <glm/geometric.hpp>
+
 #include "tetraprobe/runtime/crc32.h"
 #include "tetraprobe/runtime/file_io.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/level_file.h"
+#include "tetraprobe/runtime/oct_normal.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/tet_adjacency.h"
 
@@ -773,6 +776,14 @@ LevelResult parseLevel(const uint8_t* data, uint64_t size, const std::string& pa
       for (auto& n : c.normal) {
         for (int a = 0; a < 3; ++a) n[a] = body.f32();
         n[3] = 0.0f;
+        // Onto the octahedral lattice the GPU receives (oct_normal.h), so CPU and GPU answers agree on an
+        // old file's stored cells too (only unit normals: the validation after refuses the others).
+        const glm::dvec3 raw(n[0], n[1], n[2]);
+        if (std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2]) &&
+            std::abs(glm::dot(raw, raw) - 1.0) < 1e-3) {
+          const glm::vec3 q = quantizeOctNormal(raw);
+          for (int a = 0; a < 3; ++a) n[a] = q[a];
+        }
       }
       for (int pad = 0; pad < 3; ++pad)
         if (body.u32() != 0) return fail(LevelStatus::kCorrupt, name + "outer cell padding is not zero");

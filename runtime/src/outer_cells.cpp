@@ -10,6 +10,7 @@
 #include "tetraprobe/runtime/outer_cells.h"
 
 #include "tetraprobe/runtime/lookup_constants.h"
+#include "tetraprobe/runtime/oct_normal.h"
 
 #include <algorithm>
 #include <array>
@@ -282,7 +283,9 @@ std::vector<OuterCell> buildOuterCells(const std::vector<glm::vec3>& probes, con
     radial = lr > 0.0 ? radial / lr : aw;
     glm::dvec3 n = (1.0 - alpha[size_t(p)]) * aw + alpha[size_t(p)] * radial;
     const double ln = glm::length(n);
-    return ln > 0.0 ? n / ln : aw;
+    // On the octahedral code lattice (oct_normal.h), as the GPU receives it: the fold check below sees the
+    // normals the lookups use, and the CPU and GPU extrude along the same directions.
+    return glm::dvec3(quantizeOctNormal(ln > 0.0 ? n / ln : aw));
   };
   for (int round = 0; round <= 8; ++round) {
     for (size_t k = 0; k < cells.size(); ++k)

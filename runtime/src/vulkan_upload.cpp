@@ -5,6 +5,7 @@
 #include "tetraprobe/runtime/vulkan_upload.h"
 
 #include "tetraprobe/runtime/face_blend.h"
+#include "tetraprobe/runtime/oct_normal.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/start_bricks.h"
 #include "vulkan_staging.h"
@@ -286,7 +287,8 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   for (const OuterCell& c : outerCells) {
     GpuOuterCell g{};
     for (int i = 0; i < 3; ++i) {
-      for (int a = 0; a < 3; ++a) g.n[3 * i + a] = c.normal[i][a];
+      // The normals are on the code lattice already (buildOuterCells, loadLevel): their code decodes to them.
+      g.n[i] = encodeOctNormal(glm::dvec3(c.normal[i][0], c.normal[i][1], c.normal[i][2]));
       g.v[i] = c.v[i];
       g.link[i] = c.n[i];
     }

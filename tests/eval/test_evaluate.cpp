@@ -253,7 +253,7 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   const StartBricks bricks = buildStartBricks(level, query.startGrid(), query.cellGrid());
   EXPECT_EQ(section("start_bricks"), bricks.slots.size() * 16 + bricks.startTet.size() * 4);
   EXPECT_GT(section("start_bricks"), 0u);
-  EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 80);
+  EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 48);  // GpuOuterCell: octahedral normals
   EXPECT_GT(section("outer_cells"), 0u);
   EXPECT_EQ(section("start_grid"), query.startGrid().startTet.size() * 4);
 }

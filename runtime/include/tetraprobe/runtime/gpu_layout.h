@@ -21,7 +21,7 @@ enum GpuBinding : uint32_t {
   kGpuBindingProbes =
       1,                // TetraprobeProbes: positions (3 floats a probe), then SH (ShHalf: 14 uints a probe)
   kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
-  kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (80 bytes each)
+  kGpuBindingOuterCells = 3,  // TetraprobeOuterCells: GpuOuterHeader, then GpuOuterCell[] (48 bytes each)
   kGpuBindingCells = 4,       // TetraprobeCells: GpuCellGridHeader, then int32 data[] (slots, bricks)
   kGpuBindingOcclusion =
       5,  // TetraprobeOcclusion: GpuOcclusionHeader, then uint32 data[] (records, planes, maps)
@@ -65,19 +65,19 @@ struct GpuOuterHeader {
 };
 static_assert(sizeof(GpuOuterHeader) == 16, "TetraprobeOuterCells header: 16 bytes, cells at offset 16");
 
-// One outer cell as the shader reads it: OuterCell (level.h) as 80 bytes, the same size as on the CPU; the
-// shader reads the three probe positions from the probe buffer by index. GLSL: struct TetraprobeOuterCell
-// { ivec4 v; ivec4 link; float n[9]; float pad[3]; }.
+// One outer cell as the shader reads it: OuterCell (level.h) in 48 bytes instead of the CPU's 80, the three
+// vertex normals as octahedral codes (oct_normal.h; the CPU's normals lie on that code lattice, so both
+// extrude along the same directions); the shader reads the three probe positions from the probe buffer by
+// index. GLSL: struct TetraprobeOuterCell { ivec4 v; ivec4 link; uvec4 n; }.
 struct GpuOuterCell {
   int32_t v[4];     // v[0..2]: probe indices (outward winding); v[3]: the hull tet
   int32_t link[4];  // link[0..2]: outer cell across the edge opposite v[i], or -1; link[3]: the tet's face
-  float n[9];       // unit vertex normals of v[0..2], x y z each
-  float pad[3];     // 0
+  uint32_t n[4];    // n[0..2]: vertex normals of v[0..2], octahedral codes (oct_normal.h); n[3]: 0
 };
 static_assert(std::is_standard_layout_v<GpuOuterCell>);
-static_assert(sizeof(GpuOuterCell) == 80 && offsetof(GpuOuterCell, link) == 16 &&
-                  offsetof(GpuOuterCell, n) == 32 && offsetof(GpuOuterCell, pad) == 68,
-              "TetraprobeOuterCell: std430 array stride 80");
+static_assert(sizeof(GpuOuterCell) == 48 && offsetof(GpuOuterCell, link) == 16 &&
+                  offsetof(GpuOuterCell, n) == 32,
+              "TetraprobeOuterCell: std430 array stride 48");
 inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
 
 // Header of the TetraprobeCells buffer (32 bytes): the start bricks of start_bricks.h (the cell grid's hash

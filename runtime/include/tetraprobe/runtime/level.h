@@ -56,14 +56,15 @@ BaryFrame baryFrame(const Tet& t, const std::vector<glm::vec3>& probes);
 glm::vec4 baryWeights(const BaryFrame& f, const glm::vec3& x);
 
 // One outer cell: a hull triangle extruded along unit vertex normals, covering the space outside the hull
-// beyond it (runtime/outer_cells.h). Laid out as the GPU reads it (std430, 80 bytes; mirrored in
-// shaders/tetraprobe_layout.glsl).
+// beyond it (runtime/outer_cells.h). 80 bytes, as the old OUTC section stored it; the GPU reads the 48-byte
+// GpuOuterCell (gpu_layout.h), with the normals as octahedral codes.
 // - v[i]: the hull face's probe indices, counter-clockwise seen from outside ((P1-P0) x (P2-P0) points out).
 // - tet: the hull tet owning the face; face: the index in tet.v of the tet's vertex opposite the face
 //   (tet.n[face] == -1).
 // - n[i]: the outer cell across the hull edge opposite v[i] (edge v[i+1], v[i+2]), or -1.
 // - normal[i].xyz: unit vertex normal at v[i] (angle-weighted mean of the adjacent hull faces' outward
-//   normals; equal in every cell naming that probe); normal[i].w = 0.
+//   normals; equal in every cell naming that probe), on the octahedral code lattice (quantizeOctNormal,
+//   oct_normal.h: what the GPU decodes); normal[i].w = 0.
 struct alignas(16) OuterCell {
   int32_t v[3];
   int32_t tet;
@@ -71,7 +72,7 @@ struct alignas(16) OuterCell {
   int32_t face;
   float normal[3][4];
 };
-static_assert(sizeof(OuterCell) == 80, "OuterCell is 80 bytes in std430");
+static_assert(sizeof(OuterCell) == 80, "OuterCell is 80 bytes (the OUTC record)");
 
 // Why a probe exists: the bake stage that placed it (one byte per probe in the optional `KIND` section,
 // docs/level_format.md). Debug views and reports only; the lookup never reads it. Values 0..5 equal
