@@ -12,6 +12,7 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -227,7 +228,15 @@ struct GlslConstant {
 // guards and function-like macros have no value and are left out.
 std::vector<GlslConstant> glslConstants(std::map<std::string, int>* specIds) {
   std::vector<GlslConstant> out;
-  for (const char* file : {"tetraprobe_layout.glsl", "tetraprobe.glsl", "tetraprobe_sh.glsl"}) {
+  // Every file of the lookup (tetraprobe*.glsl), in name order: a file split off later is read too.
+  std::vector<std::string> files;
+  for (const fs::directory_entry& e : fs::directory_iterator(kShaders)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("tetraprobe", 0) == 0 && e.path().extension() == ".glsl") files.push_back(name);
+  }
+  std::sort(files.begin(), files.end());
+  EXPECT_GE(files.size(), 3u);
+  for (const std::string& file : files) {
     // Macro continuation lines joined, so a value clang-format moved to the next line is read.
     const std::string text = std::regex_replace(readText(kShaders / file), std::regex("\\\\\n\\s*"), " ");
     EXPECT_FALSE(text.empty()) << file;

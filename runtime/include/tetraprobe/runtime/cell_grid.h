@@ -77,7 +77,7 @@ inline size_t cellGridBytes(const CellGrid& grid) {
 }
 
 // The table's hash of cell coordinates (32-bit arithmetic, mirrored by tetraprobeCellHash in
-// shaders/tetraprobe.glsl): a slot search starts at cellHash(key) & (slots.size() - 1).
+// shaders/tetraprobe_locate.glsl): a slot search starts at cellHash(key) & (slots.size() - 1).
 uint32_t cellHash(int32_t x, int32_t y, int32_t z);
 
 // Buckets `tets` (over `probes`, local frame) into cells of `cellSize` metres by their bounding boxes and

@@ -38,7 +38,7 @@
 // lavapipe (docs/occlusion.md).
 // Faces on the hull, faces whose two tets both store no occlusion (every probe visible on both sides), a
 // neighbour storing nothing where this tet sees every probe too (nothing would change) and points outside
-// the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe.glsl
+// the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe_face_blend.glsl
 // (tetraprobeFaceBlendVisibility). Permissive: standard library and GLM only.
 #pragma once
 

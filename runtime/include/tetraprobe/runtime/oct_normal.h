@@ -4,10 +4,10 @@
 // GpuOuterCell), 12 bytes a cell instead of 48. Permissive: standard library and GLM only.
 //
 // Exactness. Decoding before the normalisation is exact dyadic arithmetic (every value a multiple of 2^-15 in
-// [-1, 1]) in float and double alike, so the GLSL decode (tetraprobeOctDecode, shaders/tetraprobe.glsl) and
-// this one agree bit for bit up to the final normalize; the CPU normalises in double and rounds once, the GPU
-// normalises in float (a few ulp apart). Angular error of the encoding: below 5e-5 rad (the best of the four
-// neighbouring codes is taken, by the decoded direction).
+// [-1, 1]) in float and double alike, so the GLSL decode (tetraprobeOctDecode,
+// shaders/tetraprobe_outer_cells.glsl) and this one agree bit for bit up to the final normalize; the CPU
+// normalises in double and rounds once, the GPU normalises in float (a few ulp apart). Angular error of the
+// encoding: below 5e-5 rad (the best of the four neighbouring codes is taken, by the decoded direction).
 #pragma once
 
 #include <cstdint>

@@ -1,8 +1,8 @@
 // The GPU lookup's start: for each occupied cell of the sparse cell grid (cell_grid.h; 16 m by default) a
 // dense brick of dim^3 sub-cells, each naming a tet at or a few face steps from the tet that holds the
-// sub-cell's centre. The shader (tetraprobeCellStartTet, shaders/tetraprobe.glsl) finds the cell with one
-// hash search (the cell grid's own table and keys; usually its first slot) and reads one int, where the CPU
-// descends the cell's BSP; the walk then finishes in a step or a few. The start never changes the answer,
+// sub-cell's centre. The shader (tetraprobeCellStartTet, shaders/tetraprobe_locate.glsl) finds the cell with
+// one hash search (the cell grid's own table and keys; usually its first slot) and reads one int, where the
+// CPU descends the cell's BSP; the walk then finishes in a step or a few. The start never changes the answer,
 // only the walk's length: the walk decides (tests/render: GPU == CPU per pixel). The BSP nodes stay on the
 // CPU (ProbeQuery's exact start); the GPU holds the hash slots and the bricks instead. Built at upload, not
 // stored in the level file. Permissive: standard library and GLM only.
