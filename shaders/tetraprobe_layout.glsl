@@ -29,7 +29,7 @@
 #define TETRAPROBE_SH_SCALE_UINT 13  // the uint whose high half holds the probe's scale [ShHalf::h[27]]
 #define TETRAPROBE_CELL_SLOT_INTS 4  // a hash slot: key x, y, z, brick [CellSlot]
 #define TETRAPROBE_EMPTY_LEAF int(0x80000000u)  // an empty slot's key x [kEmptyLeaf]
-#define TETRAPROBE_OCC_RECORD_UINTS 2u          // a tet's occlusion record: header, cells [TetOcclusion]
+#define TETRAPROBE_OCC_RECORD_UINTS 1u          // a tet's occlusion record: its header [kGpuOccRecordUints]
 #define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
 #define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
 #define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: face flags [kGpuOccFaceMaskShift]
@@ -103,9 +103,10 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly 
   int tetraprobeCellData[];       // offset 32
 };
 
-// Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[2 t], data[2 t + 1]: tet t's
-// record (header: kind, plane count, face flags, offset, gpu_layout.h; cells); planes from tetraprobeOccPlaneOffset (2 uints each: four snorm16); shadow-map blocks from
-// tetraprobeOccShadowOffset (16 uints each, bytes little-endian). tetraprobeOccTetCount 0: no occlusion.
+// Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[t]: tet t's header (kind,
+// plane count, face flags, offset; gpu_layout.h). A plane tet's block from tetraprobeOccPlaneOffset + offset:
+// its cells word, then its planes (2 uints each: four snorm16). A shadow-map tet's block from
+// tetraprobeOccShadowOffset + 16 offset (16 uints, bytes little-endian). tetraprobeOccTetCount 0: none.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {
   uint tetraprobeOccTetCount;      // offset 0
   uint tetraprobeOccPlaneOffset;   // offset 4

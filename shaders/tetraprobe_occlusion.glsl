@@ -93,8 +93,7 @@ uint tetraprobeOccKind(int t) {
 // tetraprobeBaryFrame (occlusionVisibility with the frame given).
 vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, vec3 n) {
   if (tetraprobeOccTetCount == 0u || t < 0 || uint(t) >= tetraprobeOccTetCount) return vec4(1.0);
-  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)],
-       cells = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t) + 1u];
+  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
   uint kind = header & 3u, count = (header >> 2) & 3u, offset = header >> TETRAPROBE_OCC_OFFSET_SHIFT;
   if (!(kind == TETRAPROBE_OCC_KIND_PLANES && tetraprobeUsePlanes) &&
       !(kind == TETRAPROBE_OCC_KIND_SHADOW_MAPS && tetraprobeUseShadowMaps))
@@ -105,11 +104,13 @@ vec4 tetraprobeOccVisibilityInFrame(int t, TetraprobeBaryFrame frame, vec3 x, ve
   vec4 vis = vec4(1.0);
   if (tetraprobeUsePlanes && kind == TETRAPROBE_OCC_KIND_PLANES) {
     if (count == 0u) return vec4(1.0);
+    uint block = tetraprobeOccPlaneOffset + offset;  // the cells word, then the planes
+    uint cells = tetraprobeOccData[block];
     float s[3] = float[3](1.0, 1.0, 1.0);
     for (uint k = 0u; k < count; ++k) {
       // Four snorm16 (OcclusionPlane::value): sign-extended, times the float nearest 1/32767 (exactly the
       // CPU's 1.0f / 32767.0f, bits 0x38000100).
-      uint o = tetraprobeOccPlaneOffset + TETRAPROBE_OCC_PLANE_UINTS * (offset + k);
+      uint o = block + 1u + TETRAPROBE_OCC_PLANE_UINTS * k;
       int a = int(tetraprobeOccData[o]), b = int(tetraprobeOccData[o + 1u]);
       vec4 c = vec4(ivec4(bitfieldExtract(a, 0, 16), bitfieldExtract(a, 16, 16), bitfieldExtract(b, 0, 16),
                           bitfieldExtract(b, 16, 16))) *

@@ -251,7 +251,7 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
       {"outer_cells", query.outerCells().size() * sizeof(GpuOuterCell)},
       {"start_grid", query.startGrid().startTet.size() * sizeof(int32_t)},
   };
-  if (occlusion) out.push_back({"occlusion", level.occlusion.bytes()});
+  if (occlusion) out.push_back({"occlusion", gpuOcclusionBytes(level.occlusion)});
   return out;
 }
 
@@ -440,7 +440,7 @@ std::vector<float> fallbackShares(const Level& level, const EvalReport& report) 
 LookupMethod occlusionMethod(const Level& level, std::shared_ptr<const LevelOcclusion> occlusion) {
   auto query = std::make_shared<ProbeQuery>(level);
   std::vector<ByteSection> sections = tetLookupBytes(*query, false);
-  sections.push_back({"occlusion", occlusion->bytes()});
+  sections.push_back({"occlusion", gpuOcclusionBytes(*occlusion)});
   const Level* lv = &level;
   LookupMethod m{"tet+occlusion", totalBytes(sections), sections, level.probes.size(),
                  [query, occlusion, lv](const glm::dvec3& p, const glm::vec3& n) {

@@ -310,25 +310,40 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   const LevelOcclusion& occ = level.occlusion;
   GpuOcclusionHeader occHeader{};
   if (!occ.empty() && occ.tets.size() == level.tets.size()) {
-    occHeader.tetCount = uint32_t(occ.tets.size());
-    occHeader.planeOffset = uint32_t(2 * occ.tets.size());
-    occHeader.shadowOffset = uint32_t(occHeader.planeOffset + 2 * occ.planes.size());
-  }
-  appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
-  if (occHeader.tetCount > 0) {
-    std::vector<TetOcclusion> records(occ.tets.size());
+    // Headers, then the plane tets' blocks (cells word and planes) in tet order, then the shadow maps.
+    std::vector<uint32_t> headers(occ.tets.size()), planeBlocks;
     for (size_t t = 0; t < occ.tets.size(); ++t) {
-      if (occ.tets[t].offset() > kGpuOccMaxOffset) {
+      const TetOcclusion& rec = occ.tets[t];
+      uint32_t offset = rec.offset();
+      if (rec.kind() == kOcclusionPlanes) {
+        if (size_t(rec.offset()) + rec.planeCount() > occ.planes.size()) {
+          if (error) *error = "tet " + std::to_string(t) + "'s occlusion planes lie beyond the level's";
+          return fail();
+        }
+        offset = uint32_t(std::min<size_t>(planeBlocks.size(), kGpuOccMaxOffset + size_t(1)));
+        planeBlocks.push_back(rec.cells);
+        for (uint32_t k = 0; k < rec.planeCount(); ++k) {
+          const OcclusionPlane& p = occ.planes[size_t(rec.offset()) + k];
+          planeBlocks.push_back(uint32_t(uint16_t(p.c[0])) | uint32_t(uint16_t(p.c[1])) << 16);
+          planeBlocks.push_back(uint32_t(uint16_t(p.c[2])) | uint32_t(uint16_t(p.c[3])) << 16);
+        }
+      }
+      if (offset > kGpuOccMaxOffset) {
         if (error)
           *error = "tet " + std::to_string(t) + "'s occlusion offset is beyond the GPU record's 2^24";
         return fail();
       }
-      records[t] = {gpuOcclusionHeader(occ.tets[t], faceBlendMask(level, occ, int32_t(t))),
-                    occ.tets[t].cells};
+      headers[t] = gpuOcclusionHeader(rec, faceBlendMask(level, occ, int32_t(t)), offset);
     }
-    appendBytes(data[kGpuBindingOcclusion], records.data(), records.size());
-    appendBytes(data[kGpuBindingOcclusion], occ.planes.data(), occ.planes.size());
+    occHeader.tetCount = uint32_t(occ.tets.size());
+    occHeader.planeOffset = uint32_t(headers.size());
+    occHeader.shadowOffset = uint32_t(headers.size() + planeBlocks.size());
+    appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
+    appendBytes(data[kGpuBindingOcclusion], headers.data(), headers.size());
+    appendBytes(data[kGpuBindingOcclusion], planeBlocks.data(), planeBlocks.size());
     appendBytes(data[kGpuBindingOcclusion], occ.shadowMaps.data(), occ.shadowMaps.size());
+  } else {
+    appendBytes(data[kGpuBindingOcclusion], &occHeader, 1);
   }
 
   // Never zero-sized (Vulkan forbids it); zero-padded to a multiple of 64 bytes.

@@ -282,7 +282,7 @@ std::map<std::string, Twin> cppTwins() {
       {"TETRAPROBE_SH_SCALE_UINT", i((3 * kShCoeffCount) / 2)},
       {"TETRAPROBE_CELL_SLOT_INTS", i(sizeof(CellSlot) / sizeof(int32_t))},
       {"TETRAPROBE_EMPTY_LEAF", i(kEmptyLeaf)},
-      {"TETRAPROBE_OCC_RECORD_UINTS", i(sizeof(TetOcclusion) / sizeof(uint32_t))},
+      {"TETRAPROBE_OCC_RECORD_UINTS", i(kGpuOccRecordUints)},
       {"TETRAPROBE_OCC_KIND_PLANES", i(kOcclusionPlanes)},
       {"TETRAPROBE_OCC_KIND_SHADOW_MAPS", i(kOcclusionShadowMaps)},
       {"TETRAPROBE_OCC_FACE_MASK_SHIFT", i(kGpuOccFaceMaskShift)},

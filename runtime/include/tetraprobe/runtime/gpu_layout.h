@@ -101,19 +101,34 @@ static_assert(sizeof(GpuCellGridHeader) == 32 && offsetof(GpuCellGridHeader, cel
 static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t), "TetraprobeCells: 4 ints a slot");
 
 // TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
-// after this header. data[2 t], data[2 t + 1]: TetOcclusion header and cells of tet t; the OcclusionPlanes
-// from planeOffset (2 uints each: four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the shadow-map blocks from shadowOffset (16 uints each, little-endian
-// bytes). tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
-// A tet's record on the GPU is TetOcclusion with its header repacked to hold the face flags of the blend
-// (face_blend.h, faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3),
-// face mask (4-7, bit 4 + k for face k), offset (from bit 8, so below 2^24 planes or shadow-map blocks; the
-// upload refuses more). `cells` as is.
+// after this header, in less than the CPU's LevelOcclusion holds (gpuOcclusionBytes):
+// - data[t]: tet t's header, TetOcclusion's repacked to hold the face flags of the blend (face_blend.h,
+//   faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3), face mask
+//   (4-7, bit 4 + k for face k), offset (from bit 8, below 2^24; the upload refuses more).
+// - Plane tets: from planeOffset, one block each: the tet's `cells` word, then its planes (2 uints each:
+//   four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the header's offset is the block's first uint,
+//   counted from planeOffset. Only plane tets carry a `cells` word (the CPU's 8-byte record gives every
+//   tet one), 4 bytes a tet less for the others.
+// - Shadow-map tets: the header's offset is the 64-byte block's index from shadowOffset (16 uints each,
+//   little-endian bytes), as TetOcclusion's.
+// tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
+inline constexpr uint32_t kGpuOccRecordUints = 1;
 inline constexpr uint32_t kGpuOccFaceMaskShift = 4;
 inline constexpr uint32_t kGpuOccOffsetShift = 8;
 inline constexpr uint32_t kGpuOccMaxOffset = (1u << (32 - kGpuOccOffsetShift)) - 1u;
-inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t faceMask) {
+inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t faceMask, uint32_t offset) {
   return uint32_t(rec.kind()) | rec.planeCount() << 2 | (faceMask & 15u) << kGpuOccFaceMaskShift |
-         rec.offset() << kGpuOccOffsetShift;
+         offset << kGpuOccOffsetShift;
+}
+
+// Bytes of the GPU's occlusion data after its header, as the upload packs it: 4 a tet, 4 + 8 a plane a
+// plane tet, the shadow-map blocks; 0 for a level without occlusion.
+inline size_t gpuOcclusionBytes(const LevelOcclusion& occ) {
+  if (occ.empty()) return 0;
+  size_t bytes = occ.tets.size() * sizeof(uint32_t) + occ.shadowMaps.size();
+  for (const TetOcclusion& t : occ.tets)
+    if (t.kind() == kOcclusionPlanes) bytes += sizeof(uint32_t) + t.planeCount() * sizeof(OcclusionPlane);
+  return bytes;
 }
 
 struct GpuOcclusionHeader {
