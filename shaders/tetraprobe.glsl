@@ -39,15 +39,15 @@
 #define TETRAPROBE_GLSL
 
 // The lookup by idea, each file including what it uses (include guards make the order safe):
-#include "tetraprobe_layout.glsl"       // the buffers (tetraprobe::gpu_layout.h)
-#include "tetraprobe_sh.glsl"           // the SH basis and irradiance (runtime/sh.h)
-#include "tetraprobe_variant.glsl"      // specialization constants
-#include "tetraprobe_tets.glsl"         // locations, probe positions, barycentric weights
-#include "tetraprobe_outer_cells.glsl"  // outside the hull
-#include "tetraprobe_locate.glsl"       // start bricks and the walk: tetraprobeLocate
-#include "tetraprobe_probe_sh.glsl"     // the probes' SH, blended
-#include "tetraprobe_occlusion.glsl"    // per-tet occlusion
 #include "tetraprobe_face_blend.glsl"   // the face blend: tetraprobeLookupVisibility
+#include "tetraprobe_layout.glsl"       // the buffers (tetraprobe::gpu_layout.h)
+#include "tetraprobe_locate.glsl"       // start bricks and the walk: tetraprobeLocate
+#include "tetraprobe_occlusion.glsl"    // per-tet occlusion
+#include "tetraprobe_outer_cells.glsl"  // outside the hull
+#include "tetraprobe_probe_sh.glsl"     // the probes' SH, blended
+#include "tetraprobe_sh.glsl"           // the SH basis and irradiance (runtime/sh.h)
+#include "tetraprobe_tets.glsl"         // locations, probe positions, barycentric weights
+#include "tetraprobe_variant.glsl"      // specialization constants
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the
