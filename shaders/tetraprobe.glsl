@@ -28,9 +28,11 @@
 //   TETRAPROBE_BINDING + 0..5 (defaults 0 and 0..5; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
 //   (runtime/vulkan_upload.h).
-// - Variants: five specialization constants, constant_id TETRAPROBE_SPEC_ID + 0..4 (default 0..4), turn off
-//   what a level does not use (SH band 2, plane or shadow-map occlusion, outer cells, the cell grid); the
-//   driver then compiles that code out. Unspecialized, everything is on (right for any level). Specialize
+// - Variants: eight specialization constants, constant_id TETRAPROBE_SPEC_ID + 0..7 (default 0..7): 0..4 turn
+//   off what a level does not use (SH band 2, plane or shadow-map occlusion, outer cells, the cell grid); the
+//   driver then compiles that code out; 5..7 give the level's tet packing (runtime/gpu_tets.h), so the tet
+//   records' shifts fold. Unspecialized, everything is on and the packing is read from the buffer (right for
+//   any level). Specialize
 //   with tetraprobe::shaderSpecialization(tetraprobe::shaderVariantFor(level, ...)) (runtime/vulkan_upload.h,
 //   runtime/shader_variant.h).
 // - Including: the shader that includes this file needs `#extension GL_GOOGLE_include_directive : require`

@@ -37,7 +37,7 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
   uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
   uint flags = (header >> TETRAPROBE_OCC_FACE_MASK_SHIFT) & 15u;
   if (flags == 0u) return vis;
-  ivec4 tv = tetraprobeTets[t].v, nbs = tetraprobeTets[t].n;
+  ivec4 tv = tetraprobeTetVertices(t), nbs = tetraprobeTetNeighbours(t);
   bool ownData = (header & 3u) != 0u;
   vec4 o = vis;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
@@ -66,13 +66,13 @@ vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n
     int k = faces[q];
     int nb = nbs[k];
     bool otherData = tetraprobeOccKind(nb) != 0u;
-    ivec4 nv = tetraprobeTets[nb].v;
+    ivec4 nv = tetraprobeTetVertices(nb);
     precise float d = max(weights[k], 0.0) / band;
     vec4 other = vec4(1.0);
     float otherBlind = 0.0;
     precise float c = ownTrust / (ownTrust + 1.0);
     if (otherData) {
-      ivec4 nn = tetraprobeTets[nb].n;
+      ivec4 nn = tetraprobeTetNeighbours(nb);
       int m = 0;
       while (m < 4 && nn[m] != t) ++m;
       if (m == 4) continue;

@@ -4,7 +4,7 @@
 // offset, array stride, binding or constant here differs from the C++ (no Vulkan device needed). Permissive.
 //
 // Bindings (all storage buffers, read-only) in descriptor set TETRAPROBE_SET (tetraprobe::GpuBinding):
-//   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, 32 bytes each (tetraprobe::Tet)
+//   TETRAPROBE_BINDING + 0  TetraprobeTets  the tets, packed (tetraprobe::GpuTetHeader, runtime/gpu_tets.h)
 //   TETRAPROBE_BINDING + 1  TetraprobeProbes  positions (3 floats a probe), then SH (tetraprobe::ShHalf, 14 uints
 //                           a probe)
 //   TETRAPROBE_BINDING + 2  TetraprobeGrid  the walk's start grid: a 48-byte header, then one int per cell
@@ -42,15 +42,17 @@
 #define TETRAPROBE_SHADOW_NO_HIT 255u  // a lattice depth byte: nothing met before the face [kShadowMapNoHit]
 #define TETRAPROBE_SHADOW_SCALE 254.0  // depth byte = round(254 f) [kShadowMapScale]
 
-// One tetrahedron. v: probe indices; n[i]: the tet across the face opposite v[i], -1 on the hull.
-// Barycentrics come from the four probe positions (tetraprobeBaryFrame in tetraprobe.glsl).
-struct TetraprobeTet {
-  ivec4 v;  // offset 0
-  ivec4 n;  // offset 16; 32 bytes in all
-};
-
+// The tets (tetraprobe::GpuTetHeader, runtime/gpu_tets.h): a header, then one record of tetraprobeTetStride
+// uints a tet, fields least significant bit first: v[0..3] (probe indices, tetraprobeTetVertexBits each), then
+// n[0..3] (tetraprobeTetNeighbourBits each: the tet across the face opposite v[i], + 1; 0 on the hull); then
+// four zero uints. Read them with tetraprobeTetVertices and tetraprobeTetNeighbour (tetraprobe_tets.glsl).
+// Barycentrics come from the four probe positions (tetraprobeBaryFrame).
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly buffer TetraprobeTets {
-  TetraprobeTet tetraprobeTets[];
+  uint tetraprobeTetVertexBits;     // offset 0
+  uint tetraprobeTetNeighbourBits;  // offset 4
+  uint tetraprobeTetStride;         // offset 8: uints a tet
+  uint tetraprobeTetRecords;        // offset 12: tets
+  uint tetraprobeTetData[];         // offset 16
 };
 
 // Probe p's position (local frame, metres; float bits) at 3 * p + 0..2; its SH (tetraprobe::ShHalf) as 14

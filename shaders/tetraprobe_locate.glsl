@@ -63,7 +63,7 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, o
   for (int step = 0; step < maxSteps; ++step) {
     vec4 w = tetraprobeWeights(cur, x);
     int m = tetraprobeMinIndex(w);
-    int next = tetraprobeTets[cur].n[m];
+    int next = tetraprobeTetNeighbour(cur, m);
     if (w[m] >= -TETRAPROBE_INSIDE_EPS || isnan(w[m])) {
       // Inside within tolerance; a point that close to a face may be more inside the neighbour.
       if (w[m] < 0.0 && next >= 0) {
@@ -87,12 +87,12 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, o
       }
       int mi = -1;
       for (int i = 0; i < 4; ++i)
-        if (tetraprobeTets[cur].n[i] >= 0 && (mi < 0 || w[i] < w[mi])) mi = i;
+        if (tetraprobeTetNeighbour(cur, i) >= 0 && (mi < 0 || w[i] < w[mi])) mi = i;
       if (mi < 0 || w[mi] >= -TETRAPROBE_INSIDE_EPS) {
         loc = tetraprobeFinish(cur, w, true);
         return true;
       }
-      next = tetraprobeTets[cur].n[mi];
+      next = tetraprobeTetNeighbour(cur, mi);
       m = mi;
     }
     if (best < 0 || w[m] > bestMin) {

@@ -172,7 +172,7 @@ vec4 tetraprobeOccApply(vec4 weights, vec4 visibility, out float fallback) {
 // probeFront (runtime/occlusion.h): per probe of tet t, 1 when it lies in front of the surface at x (rising at
 // least TETRAPROBE_OCC_FRONT_SINE above its plane), 0 on or behind it, linear between; 1 for a zero normal.
 vec4 tetraprobeProbeFront(int t, vec3 x, vec3 n) {
-  ivec4 v = tetraprobeTets[t].v;
+  ivec4 v = tetraprobeTetVertices(t);
   vec4 front = vec4(1.0);
   float nl = length(n);
   for (int i = 0; i < 4; ++i) {

@@ -198,7 +198,7 @@ vec3 tetraprobeOuterWeights(int k, vec3 x, out bool valid) {
 // Cell k's answer: its triangle weights (negatives clamped, renormalized) on the hull tet's probes.
 TetraprobeLocation tetraprobeFinishOuter(int k, vec3 b) {
   int t = tetraprobeOuterCells[k].v.w;
-  ivec4 tv = tetraprobeTets[t].v;
+  ivec4 tv = tetraprobeTetVertices(t);
   vec4 w = vec4(0.0);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 4; ++j)

@@ -41,7 +41,7 @@ vec3 tetraprobeProbeSh(int p, int i, float scale) {
 // Blends the RGB coefficients of tet t's probes with weights w (probe 0 first, as shBlend does): the first
 // tetraprobeShCount; the others are 0.
 void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
-  ivec4 v = tetraprobeTets[t].v;
+  ivec4 v = tetraprobeTetVertices(t);
   for (int i = 0; i < 9; ++i) c[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
     float scale = tetraprobeShScale(v[k]);
@@ -56,7 +56,7 @@ void tetraprobeBlendSh(int t, vec4 w, out vec3 c[9]) {
 // tetraprobeBlendSh with three weight vectors in one pass over the probes' SH (each coefficient read once):
 // cw with w, cp with p, cu with u, each sum in tetraprobeBlendSh's order (the same bits).
 void tetraprobeBlendSh3(int t, vec4 w, vec4 p, vec4 u, out vec3 cw[9], out vec3 cp[9], out vec3 cu[9]) {
-  ivec4 v = tetraprobeTets[t].v;
+  ivec4 v = tetraprobeTetVertices(t);
   for (int i = 0; i < 9; ++i) cw[i] = cp[i] = cu[i] = vec3(0.0);
   for (int k = 0; k < 4; ++k) {
     float scale = tetraprobeShScale(v[k]);

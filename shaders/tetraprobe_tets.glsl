@@ -22,11 +22,54 @@
 
 struct TetraprobeLocation {
   int tet;        // containing tet, or the outer cell's hull tet; -1 for an empty level
-  vec4 weights;   // weights of tetraprobeTets[tet].v[0..3]: non-negative, sum to 1
+  vec4 weights;   // weights of tetraprobeTetVertices(tet)[0..3]: non-negative, sum to 1
   bool inside;    // the point lies in the tet (no weight below -TETRAPROBE_INSIDE_EPS)
   int outerCell;  // outside the hull: the outer cell holding the point (weights: its triangle's, on the
                   // hull tet's probes, 0 on the fourth); -1 inside
 };
+
+// The `width`-bit field (1..32) at bit `bit` of the tet record starting at uint `base` (gpu_tets.h getBits),
+// without a branch: the next word is always read (the zero tail keeps that in the buffer) and shifted in by
+// two steps, so a field that does not straddle gets nothing from it.
+uint tetraprobeTetField(uint base, uint bit, uint mask) {
+  uint w = base + (bit >> 5u), s = bit & 31u;
+  return ((tetraprobeTetData[w] >> s) | ((tetraprobeTetData[w + 1u] << 1u) << (31u - s))) & mask;
+}
+
+uint tetraprobeTetMask(uint width) {
+  return width >= 32u ? 0xffffffffu : (1u << width) - 1u;
+}
+
+// The packing: the specialization constants when set (folded by the driver), else the buffer's header.
+uint tetraprobeTetVb() {
+  return tetraprobeSpecTetVertexBits != 0u ? tetraprobeSpecTetVertexBits : tetraprobeTetVertexBits;
+}
+uint tetraprobeTetNb() {
+  return tetraprobeSpecTetNeighbourBits != 0u ? tetraprobeSpecTetNeighbourBits : tetraprobeTetNeighbourBits;
+}
+uint tetraprobeTetBase(int t) {
+  return uint(t) * (tetraprobeSpecTetStride != 0u ? tetraprobeSpecTetStride : tetraprobeTetStride);
+}
+
+// Tet t's four probe indices (tetraprobe::Tet::v).
+ivec4 tetraprobeTetVertices(int t) {
+  uint base = tetraprobeTetBase(t), vb = tetraprobeTetVb(), mask = tetraprobeTetMask(vb);
+  return ivec4(int(tetraprobeTetField(base, 0u, mask)), int(tetraprobeTetField(base, vb, mask)),
+               int(tetraprobeTetField(base, 2u * vb, mask)), int(tetraprobeTetField(base, 3u * vb, mask)));
+}
+
+// The tet across tet t's face opposite v[i] (tetraprobe::Tet::n), -1 on the hull.
+int tetraprobeTetNeighbour(int t, int i) {
+  uint nb = tetraprobeTetNb();
+  return int(tetraprobeTetField(tetraprobeTetBase(t), 4u * tetraprobeTetVb() + uint(i) * nb,
+                                tetraprobeTetMask(nb))) -
+         1;
+}
+
+ivec4 tetraprobeTetNeighbours(int t) {
+  return ivec4(tetraprobeTetNeighbour(t, 0), tetraprobeTetNeighbour(t, 1), tetraprobeTetNeighbour(t, 2),
+               tetraprobeTetNeighbour(t, 3));
+}
 
 // Probe p's position (local frame, metres).
 vec3 tetraprobeProbePosition(int p) {
@@ -52,7 +95,7 @@ float tetraprobeDot(vec3 a, vec3 b) {
 }
 
 TetraprobeBaryFrame tetraprobeBaryFrame(int t) {
-  ivec4 v = tetraprobeTets[t].v;
+  ivec4 v = tetraprobeTetVertices(t);
   vec3 p3 = tetraprobeProbePosition(v.w);
   precise vec3 e0 = tetraprobeProbePosition(v.x) - p3, e1 = tetraprobeProbePosition(v.y) - p3,
                e2 = tetraprobeProbePosition(v.z) - p3;

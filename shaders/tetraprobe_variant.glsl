@@ -13,5 +13,10 @@ layout(constant_id = TETRAPROBE_SPEC_ID + 1) const bool tetraprobeUsePlanes = tr
 layout(constant_id = TETRAPROBE_SPEC_ID + 2) const bool tetraprobeUseShadowMaps = true;
 layout(constant_id = TETRAPROBE_SPEC_ID + 3) const bool tetraprobeUseOuterCells = true;
 layout(constant_id = TETRAPROBE_SPEC_ID + 4) const bool tetraprobeUseCellGrid = true;
+// The level's tet packing (runtime/gpu_tets.h), so the record's shifts and masks fold; 0: read the
+// TetraprobeTets header at run time.
+layout(constant_id = TETRAPROBE_SPEC_ID + 5) const uint tetraprobeSpecTetVertexBits = 0u;
+layout(constant_id = TETRAPROBE_SPEC_ID + 6) const uint tetraprobeSpecTetNeighbourBits = 0u;
+layout(constant_id = TETRAPROBE_SPEC_ID + 7) const uint tetraprobeSpecTetStride = 0u;
 
 #endif  // TETRAPROBE_VARIANT_GLSL

@@ -20,6 +20,7 @@
 #include "tetraprobe/eval/reference_image.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/gpu_layout.h"
+#include "tetraprobe/runtime/gpu_tets.h"
 #include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
@@ -245,7 +246,7 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
       {"positions", level.probes.size() * sizeof(glm::vec3)},
       {"sh",
        level.sh.size() * sizeof(ShHalf)},  // as the file and the GPU hold them (the CPU expands to float)
-      {"tets", level.tets.size() * sizeof(Tet)},
+      {"tets", gpuTetBytes(level.probes.size(), level.tets.size())},  // packed (gpu_tets.h)
       {"start_bricks",
        startBricksBytes(query.cellGrid())},  // the GPU's start (the CPU's BSP is not read there)
       {"outer_cells", query.outerCells().size() * sizeof(GpuOuterCell)},

@@ -2,6 +2,8 @@
 // accelerators the GLSL lookup must keep, read from the level and what is uploaded with it.
 #include "tetraprobe/runtime/shader_variant.h"
 
+#include "tetraprobe/runtime/gpu_tets.h"
+
 namespace tetraprobe {
 
 void ShaderVariant::specValues(uint32_t out[kShaderSpecConstantCount]) const {
@@ -10,6 +12,9 @@ void ShaderVariant::specValues(uint32_t out[kShaderSpecConstantCount]) const {
   out[kSpecShadowMaps] = shadowMaps ? 1u : 0u;
   out[kSpecOuterCells] = outerCells ? 1u : 0u;
   out[kSpecCellGrid] = cellGrid ? 1u : 0u;
+  out[kSpecTetVertexBits] = tetVertexBits;
+  out[kSpecTetNeighbourBits] = tetNeighbourBits;
+  out[kSpecTetStride] = tetStride;
 }
 
 std::string ShaderVariant::name() const {
@@ -51,20 +56,27 @@ ShaderVariant shaderVariantFor(const Level& level, const std::vector<OuterCell>&
   }
   v.outerCells = !outerCells.empty();
   v.cellGrid = !cellGrid.slots.empty();
+  const GpuTetPacking packing = gpuTetPacking(level.probes.size(), level.tets.size());
+  v.tetVertexBits = packing.vertexBits;
+  v.tetNeighbourBits = packing.neighbourBits;
+  v.tetStride = packing.strideUints;
   return v;
 }
 
 bool shaderVariantCovers(const ShaderVariant& variant, const ShaderVariant& needed) {
   return variant.shOrder >= needed.shOrder && (variant.planes || !needed.planes) &&
          (variant.shadowMaps || !needed.shadowMaps) && (variant.outerCells || !needed.outerCells) &&
-         (variant.cellGrid || !needed.cellGrid);
+         (variant.cellGrid || !needed.cellGrid) &&
+         ((variant.tetVertexBits == 0 && variant.tetNeighbourBits == 0 && variant.tetStride == 0) ||
+          (variant.tetVertexBits == needed.tetVertexBits &&
+           variant.tetNeighbourBits == needed.tetNeighbourBits && variant.tetStride == needed.tetStride));
 }
 
 std::vector<ShaderVariant> coveringShaderVariants(const ShaderVariant& needed) {
   std::vector<ShaderVariant> out{needed};
   const auto add = [&out](const ShaderVariant& v) {
     for (const ShaderVariant& o : out)
-      if (o == v) return;
+      if (o.name() == v.name()) return;
     out.push_back(v);
   };
   ShaderVariant v = needed;

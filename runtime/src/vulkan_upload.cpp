@@ -5,6 +5,7 @@
 #include "tetraprobe/runtime/vulkan_upload.h"
 
 #include "tetraprobe/runtime/face_blend.h"
+#include "tetraprobe/runtime/gpu_tets.h"
 #include "tetraprobe/runtime/oct_normal.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/start_bricks.h"
@@ -258,7 +259,19 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   }
 
   std::vector<char>* data = out.bytes;
-  appendBytes(data[kGpuBindingTets], level.tets.data(), level.tets.size());
+  {
+    const GpuTetPacking packing = gpuTetPacking(level.probes.size(), level.tets.size());
+    GpuTetHeader tetHeader{};
+    tetHeader.vertexBits = packing.vertexBits;
+    tetHeader.neighbourBits = packing.neighbourBits;
+    tetHeader.strideUints = packing.strideUints;
+    tetHeader.count = uint32_t(level.tets.size());
+    std::vector<uint32_t> records(level.tets.size() * packing.strideUints + kGpuTetTailUints, 0u);
+    for (size_t t = 0; t < level.tets.size(); ++t)
+      packGpuTet(level.tets[t], packing, records.data() + t * packing.strideUints);
+    appendBytes(data[kGpuBindingTets], &tetHeader, 1);
+    appendBytes(data[kGpuBindingTets], records.data(), records.size());
+  }
   appendBytes(data[kGpuBindingProbes], level.probes.data(), level.probes.size());
   std::vector<ShHalf> shHalf(level.sh.size());
   for (size_t p = 0; p < level.sh.size(); ++p)

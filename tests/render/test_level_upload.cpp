@@ -6,6 +6,7 @@
 // checks hold on a discrete GPU too.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,8 @@
 
 #include "lookup_scene.h"
 #include "point_lookup.h"
+#include "tetraprobe/runtime/gpu_layout.h"
+#include "tetraprobe/runtime/gpu_tets.h"
 #include "tetraprobe/runtime/probe_update.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
@@ -192,6 +195,38 @@ TEST(LevelUpload, StagedShWriteReadsBackAsThePackingOfTheRelitLevel) {
     if (std::string(e.what()).find("no Vulkan") != std::string::npos) GTEST_SKIP() << e.what();
     throw;
   }
+}
+
+// The tets buffer holds the header and every tet's packed record (gpu_tets.h), each unpacking to the level's
+// tet, then the zero tail; its size before the padding is gpuTetBytes, what `inspect` and `eval` count.
+TEST(LevelUpload, TetBufferHoldsEveryTetPackedAndItsCountedBytes) {
+  const Level level = occludedLevel();
+  const ProbeQuery query(level);
+  std::string error;
+  PackedLevelBuffers packed;
+  ASSERT_TRUE(
+      packLevelBuffers(level, query.startGrid(), query.outerCells(), query.cellGrid(), packed, &error))
+      << error;
+  const std::vector<char>& bytes = packed.bytes[kGpuBindingTets];
+  const size_t counted = gpuTetBytes(level.probes.size(), level.tets.size());
+  EXPECT_EQ(bytes.size(), std::max<size_t>(64, (counted + 63) / 64 * 64));
+  GpuTetHeader header;
+  std::memcpy(&header, bytes.data(), sizeof(header));
+  const GpuTetPacking packing = gpuTetPacking(level.probes.size(), level.tets.size());
+  EXPECT_EQ(header.vertexBits, packing.vertexBits);
+  EXPECT_EQ(header.neighbourBits, packing.neighbourBits);
+  EXPECT_EQ(header.strideUints, packing.strideUints);
+  ASSERT_EQ(header.count, level.tets.size());
+  std::vector<uint32_t> words((bytes.size() - sizeof(header)) / 4);
+  std::memcpy(words.data(), bytes.data() + sizeof(header), words.size() * 4);
+  for (size_t t = 0; t < level.tets.size(); ++t) {
+    const Tet back = unpackGpuTet(words.data() + t * packing.strideUints, packing);
+    for (int i = 0; i < 4; ++i) {
+      ASSERT_EQ(back.v[i], level.tets[t].v[i]) << "tet " << t;
+      ASSERT_EQ(back.n[i], level.tets[t].n[i]) << "tet " << t;
+    }
+  }
+  for (size_t w = level.tets.size() * packing.strideUints; w < words.size(); ++w) EXPECT_EQ(words[w], 0u);
 }
 
 // A level the shader would read out of bounds is refused before anything is created or recorded.

@@ -17,6 +17,7 @@
 #include "lighting.comp.h"
 #include "lighting_debug_scan.comp.h"
 #include "lookup_scene.h"
+#include "tetraprobe/runtime/gpu_tets.h"
 #include "tetraprobe/runtime/shader_variant.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
 
@@ -88,7 +89,16 @@ TEST(ShaderVariant, OcclusionKindsPresentAreOn) {
   level.occlusion = syntheticOcclusion(level);
   v = variantOf(level);
   EXPECT_TRUE(v.planes && v.shadowMaps);
-  EXPECT_EQ(v, kGenericShaderVariant);
+  EXPECT_EQ(v.name(), kGenericShaderVariant.name());
+  // Every feature on, and the level's tet packing, which the generic variant reads at run time.
+  const GpuTetPacking packing = gpuTetPacking(level.probes.size(), level.tets.size());
+  EXPECT_EQ(v.tetVertexBits, packing.vertexBits);
+  EXPECT_EQ(v.tetNeighbourBits, packing.neighbourBits);
+  EXPECT_EQ(v.tetStride, packing.strideUints);
+  EXPECT_TRUE(shaderVariantCovers(kGenericShaderVariant, v));
+  ShaderVariant other = v;
+  other.tetStride += 1;
+  EXPECT_FALSE(shaderVariantCovers(other, v)) << "another level's packing reads the wrong words";
 }
 
 // L1 only when the level says so and band 2 really is zero (an L2 coefficient left in would be dropped).
@@ -150,7 +160,7 @@ std::vector<uint32_t> specIds(const uint32_t* code, size_t bytes) {
 
 // No shipping shader that includes tetraprobe.glsl holds the O(tets) or O(outer cells) scan: their functions
 // are not in the SPIR-V (glslang keeps function names, OpName, as the debug build shows), so no pipeline made
-// from it can run one. The shipping lookup declares the five specialization constants.
+// from it can run one. The shipping lookup declares the eight specialization constants.
 TEST(ShaderVariant, ShippingShadersHaveNoScanLoop) {
   struct Module {
     const char* name;
@@ -173,7 +183,7 @@ TEST(ShaderVariant, ShippingShadersHaveNoScanLoop) {
                              "tetraprobeOuterScan"));
   std::vector<uint32_t> ids = specIds(kSpirv_lighting_comp, sizeof(kSpirv_lighting_comp));
   std::sort(ids.begin(), ids.end());
-  EXPECT_EQ(ids, (std::vector<uint32_t>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(ids, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
 }
 
 // --- GPU against CPU per variant ----------------------------------------------------------------------------
@@ -273,6 +283,35 @@ TEST(GpuVariants, VariantWithoutAFeatureTheLevelUsesDiffers) {
                 v.name().c_str(), c.bad, c.pixels);
     EXPECT_GT(c.bad, 500) << v.name();
   }
+}
+
+// The tet packing read from the buffer at run time (the generic variant) and folded from the level's
+// specialization constants give the same pixels, bit for bit; a wrong packing in the constants is read (many
+// pixels off), so the constants are what the specialized lookup uses.
+TEST(GpuVariants, TetPackingFromConstantsEqualsPackingReadAtRunTime) {
+  Level level = makeLevel();
+  level.occlusion = syntheticOcclusion(level);
+  RenderResult own, generic;
+  const Comparison a = compareWithCpu(level, RenderOptions{}, &own);
+  if (a.skipped) TETRAPROBE_SKIP_MISSING(a.why);
+  EXPECT_NE(own.variant.tetStride, 0u) << "the renderer specializes with the level's packing";
+  RenderOptions options;
+  options.variant = kGenericShaderVariant;
+  const Comparison b = compareWithCpu(level, options, &generic);
+  EXPECT_EQ(a.bad, 0);
+  EXPECT_EQ(b.bad, 0);
+  ASSERT_EQ(own.color.rgba.size(), generic.color.rgba.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < own.color.rgba.size(); ++i) differ += own.color.rgba[i] != generic.color.rgba[i];
+  EXPECT_EQ(differ, 0u);
+  ShaderVariant wrong = own.variant;
+  wrong.tetVertexBits += 1;
+  options.variant = wrong;
+  const Comparison c = compareWithCpu(level, options);
+  std::printf("tet packing %u/%u bits, stride %u: a vertex width one bit off puts %d of %d pixels off\n",
+              own.variant.tetVertexBits, own.variant.tetNeighbourBits, own.variant.tetStride, c.bad,
+              c.pixels);
+  EXPECT_GT(c.bad, 500);
 }
 
 // The shipping lookup (no scan) and the debug build that scans every tet and outer cell after a failed walk

@@ -109,7 +109,7 @@ const char* kLayoutProbe = R"(#version 450
 layout(local_size_x = 1) in;
 layout(std430, set = 1, binding = 0) writeonly buffer Out { uint outValue; };
 void main() {
-  outValue = uint(tetraprobeTets[0].v.x) + tetraprobeProbeData[0] + uint(tetraprobeGridMin.x) +
+  outValue = tetraprobeTetData[0] + tetraprobeTetStride + tetraprobeProbeData[0] + uint(tetraprobeGridMin.x) +
              uint(tetraprobeStartTet[0]) + uint(tetraprobeOuterCellCount) + uint(tetraprobeOuterCells[0].n[2]) +
              uint(tetraprobeCellData[0]) + tetraprobeOccData[0];
 }
@@ -133,8 +133,11 @@ std::vector<ExpectedBlock> expectedBlocks() {
   return {
       {"TetraprobeTets",
        kGpuBindingTets,
-       {{"tetraprobeTets[0].v", long(offsetof(Tet, v)), -1, long(sizeof(Tet))},
-        {"tetraprobeTets[0].n", long(offsetof(Tet, n)), -1, long(sizeof(Tet))}}},
+       {{"tetraprobeTetVertexBits", long(offsetof(GpuTetHeader, vertexBits))},
+        {"tetraprobeTetNeighbourBits", long(offsetof(GpuTetHeader, neighbourBits))},
+        {"tetraprobeTetStride", long(offsetof(GpuTetHeader, strideUints))},
+        {"tetraprobeTetRecords", long(offsetof(GpuTetHeader, count))},
+        {"tetraprobeTetData", long(sizeof(GpuTetHeader)), long(sizeof(uint32_t))}}},
       {"TetraprobeProbes", kGpuBindingProbes, {{"tetraprobeProbeData", 0, long(sizeof(uint32_t))}}},
       {"TetraprobeGrid",
        kGpuBindingGrid,
@@ -197,7 +200,7 @@ TEST(GlslLayout, EveryBlockMemberHasTheCppOffsetAndBinding) {
   }
   EXPECT_EQ(blocks, int(kGpuBindingCount));
   // Members the GLSL has and this table lacks (the shorter, unindexed names glslang also lists for members
-  // the shader read, "tetraprobeTets.v", are the same members).
+  // the shader read, "tetraprobeOuterCells.n", are the same members).
   for (const auto& [name, e] : r.members) {
     if (name.find('.') != std::string::npos && name.find('[') == std::string::npos) continue;
     if (name == "outValue") continue;
@@ -327,6 +330,9 @@ std::map<std::string, Twin> cppTwins() {
       {"tetraprobeUseShadowMaps", i(kGenericShaderVariant.shadowMaps)},
       {"tetraprobeUseOuterCells", i(kGenericShaderVariant.outerCells)},
       {"tetraprobeUseCellGrid", i(kGenericShaderVariant.cellGrid)},
+      {"tetraprobeSpecTetVertexBits", i(kGenericShaderVariant.tetVertexBits)},
+      {"tetraprobeSpecTetNeighbourBits", i(kGenericShaderVariant.tetNeighbourBits)},
+      {"tetraprobeSpecTetStride", i(kGenericShaderVariant.tetStride)},
   };
 }
 
@@ -368,7 +374,10 @@ TEST(GlslLayout, SpecializationIdsAreShaderSpecConstants) {
                                                {"tetraprobeUsePlanes", kSpecPlanes},
                                                {"tetraprobeUseShadowMaps", kSpecShadowMaps},
                                                {"tetraprobeUseOuterCells", kSpecOuterCells},
-                                               {"tetraprobeUseCellGrid", kSpecCellGrid}};
+                                               {"tetraprobeUseCellGrid", kSpecCellGrid},
+                                               {"tetraprobeSpecTetVertexBits", kSpecTetVertexBits},
+                                               {"tetraprobeSpecTetNeighbourBits", kSpecTetNeighbourBits},
+                                               {"tetraprobeSpecTetStride", kSpecTetStride}};
   EXPECT_EQ(ids, expected);
   EXPECT_EQ(ids.size(), size_t(kShaderSpecConstantCount));
 }

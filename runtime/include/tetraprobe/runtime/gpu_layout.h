@@ -17,7 +17,7 @@ namespace tetraprobe {
 
 // Binding TETRAPROBE_BINDING + i of set TETRAPROBE_SET (defaults: set 0, first binding 0).
 enum GpuBinding : uint32_t {
-  kGpuBindingTets = 0,  // TetraprobeTets: Tet[] (32 bytes each)
+  kGpuBindingTets = 0,  // TetraprobeTets: GpuTetHeader, then packed tets (gpu_tets.h)
   kGpuBindingProbes =
       1,                // TetraprobeProbes: positions (3 floats a probe), then SH (ShHalf: 14 uints a probe)
   kGpuBindingGrid = 2,  // TetraprobeGrid: GpuGridHeader, then int32 startTet[cells]
@@ -28,10 +28,20 @@ enum GpuBinding : uint32_t {
   kGpuBindingCount = 6,
 };
 
-// The tet buffer holds tetraprobe::Tet as is: GLSL `struct TetraprobeTet { ivec4 v; ivec4 n; }`.
-static_assert(std::is_standard_layout_v<Tet>);
-static_assert(sizeof(Tet) == 32 && alignof(Tet) == 16, "TetraprobeTet: 32 bytes, std430 array stride 32");
-static_assert(offsetof(Tet, v) == 0 && offsetof(Tet, n) == 16, "TetraprobeTet");
+// Header of the TetraprobeTets buffer (16 bytes): the tets packed as gpu_tets.h says (GpuTetPacking), one
+// record of strideUints words a tet from offset 16, then kGpuTetTailUints zero words (the shader reads a
+// record's first four words at once, however short the record).
+struct GpuTetHeader {
+  uint32_t vertexBits;     // uint tetraprobeTetVertexBits: bits of a probe index
+  uint32_t neighbourBits;  // uint tetraprobeTetNeighbourBits: bits of a neighbour code (index + 1; 0 = hull)
+  uint32_t strideUints;    // uint tetraprobeTetStride: words a tet
+  uint32_t count;          // uint tetraprobeTetRecords: tets
+};
+static_assert(std::is_standard_layout_v<GpuTetHeader>);
+static_assert(sizeof(GpuTetHeader) == 16 && offsetof(GpuTetHeader, neighbourBits) == 4 &&
+                  offsetof(GpuTetHeader, strideUints) == 8 && offsetof(GpuTetHeader, count) == 12,
+              "TetraprobeTets header: 16 bytes, records at offset 16");
+inline constexpr uint32_t kGpuTetTailUints = 4;
 
 // The probe buffer (uint data[]): Level::probes as is (3 floats per probe, x y z, local frame) from index 0,
 // then one ShHalf per probe (sh_half.h: 27 binary16 coefficients, coefficient-major then r,g,b, and the

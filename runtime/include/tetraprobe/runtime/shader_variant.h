@@ -22,7 +22,12 @@ enum ShaderSpecConstant : uint32_t {
   kSpecShadowMaps = 2,  // bool tetraprobeUseShadowMaps: evaluate shadow-map occlusion records
   kSpecOuterCells = 3,  // bool tetraprobeUseOuterCells: continue outside the hull across the outer cells
   kSpecCellGrid = 4,    // bool tetraprobeUseCellGrid: start walks from the start bricks (start_bricks.h)
-  kShaderSpecConstantCount = 5,
+  // The level's tet packing (gpu_tets.h), so the driver folds the record's shifts and masks; 0: read from the
+  // TetraprobeTets header at run time (right for any level, slower).
+  kSpecTetVertexBits = 5,     // uint tetraprobeSpecTetVertexBits
+  kSpecTetNeighbourBits = 6,  // uint tetraprobeSpecTetNeighbourBits
+  kSpecTetStride = 7,         // uint tetraprobeSpecTetStride
+  kShaderSpecConstantCount = 8,
 };
 
 // One variant. A feature turned off is not compiled in (after specialization): a level that holds such data
@@ -33,9 +38,12 @@ struct ShaderVariant {
   bool shadowMaps = true;  // occlusion records of kind kOcclusionShadowMaps are evaluated
   bool outerCells = true;  // points outside the hull go across the outer cells (else: the clamped hull tet)
   bool cellGrid = true;    // walks start from the start bricks (else from the coarse start grid)
+  // The tet packing the level uploads with (gpuTetPacking), all three or none (0: read from the buffer).
+  // Not a feature: name() leaves it out, and any packing is covered by 0.
+  uint32_t tetVertexBits = 0, tetNeighbourBits = 0, tetStride = 0;
 
   bool operator==(const ShaderVariant&) const = default;
-  // The 32-bit values of constants 0..4 in ShaderSpecConstant order (bools as 0 / 1).
+  // The 32-bit values of constants 0..7 in ShaderSpecConstant order (bools as 0 / 1).
   void specValues(uint32_t out[kShaderSpecConstantCount]) const;
   // A stable name: "l1" or "l2", then "+planes", "+shadow_maps", "+outer", "+cells" for the features on,
   // e.g. "l2+planes+outer+cells".
@@ -52,17 +60,19 @@ inline constexpr ShaderVariant kGenericShaderVariant{};
 // The smallest variant that answers exactly as the generic one for `level` uploaded with `outerCells` and
 // `cellGrid` (the arguments given to uploadLevelBuffers): SH order 1 when Level::shOrder is 1 and every
 // probe's coefficients 4..8 are zero; planes / shadow maps when some tet's occlusion record is of that kind;
-// outer cells when `outerCells` is not empty; the cell grid when it has slots. O(probes + tets).
+// outer cells when `outerCells` is not empty; the cell grid when it has slots; the level's tet packing
+// (gpuTetPacking). O(probes + tets).
 ShaderVariant shaderVariantFor(const Level& level, const std::vector<OuterCell>& outerCells,
                                const CellGrid& cellGrid);
 
-// True when `variant` has every feature `needed` has (and an SH order at least as high): its answers for a
-// level that needs `needed` are the same.
+// True when `variant` has every feature `needed` has (and an SH order at least as high) and either no tet
+// packing (read at run time) or needed's: its answers for a level that needs `needed` are the same.
 bool shaderVariantCovers(const ShaderVariant& variant, const ShaderVariant& needed);
 
 // The variants that cover `needed`: `needed` itself first, then each with one more feature turned on
 // (order 2, planes, shadow maps, outer cells, cell grid, in that order, those not already on), then the
-// generic variant; no duplicates. What `tetraprobe bench render` times.
+// generic variant; none twice by name (the ones with features added keep needed's tet packing; the generic
+// one reads it at run time). What `tetraprobe bench render` times.
 std::vector<ShaderVariant> coveringShaderVariants(const ShaderVariant& needed);
 
 }  // namespace tetraprobe

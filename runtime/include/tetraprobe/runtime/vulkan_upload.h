@@ -150,7 +150,7 @@ VkResult writeLevelSh(VkPhysicalDevice physicalDevice, VkDevice device, VkQueue 
                       std::string* error = nullptr);
 
 // The VkSpecializationInfo of a shader variant (shader_variant.h) for a pipeline whose shader includes
-// tetraprobe.glsl: constant_id firstConstantId + 0..4 (TETRAPROBE_SPEC_ID in the shader, default 0), 4 bytes
+// tetraprobe.glsl: constant_id firstConstantId + 0..7 (TETRAPROBE_SPEC_ID in the shader, default 0), 4 bytes
 // each. `info` points into this object, so it is neither copied nor moved: fill it in place with
 // shaderSpecialization() and keep it alive until vkCreateComputePipelines / vkCreateGraphicsPipelines
 // returns. Engines: shaderSpecialization(shaderVariantFor(level, query.outerCells(), query.cellGrid()), 0,
