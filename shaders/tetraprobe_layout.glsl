@@ -94,7 +94,8 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 3) readonly 
 // The start bricks (tetraprobe::GpuCellGridHeader, runtime/start_bricks.h). data[]: the cell grid's hash
 // slots at 0 (4 ints: key x, y, z, the cell's brick; key x = INT_MIN when empty), then from
 // tetraprobeCellBrickOffset one brick per occupied cell: tetraprobeCellBrickDim^3 start tets, sub-cell
-// (i, j, k) at i + dim * (j + dim * k).
+// (i, j, k) of brick b the entry e = b dim^3 + i + dim * (j + dim * k), each packed at the tets' neighbour
+// width (bitsFor(tets), runtime/gpu_tets.h) from bit e * width, then a zero word.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly buffer TetraprobeCells {
   vec3 tetraprobeCellMin;         // offset 0, local frame, metres
   float tetraprobeCellSize;       // offset 12, metres

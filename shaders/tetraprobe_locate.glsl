@@ -43,8 +43,11 @@ int tetraprobeCellStartTet(vec3 x) {
   if (brick < 0) return -1;
   int dim = tetraprobeCellBrickDim;
   ivec3 s = ivec3(clamp((g - f) * float(dim), vec3(0.0), vec3(float(dim - 1))));
-  int base = tetraprobeCellBrickOffset + dim * dim * dim * brick;
-  return tetraprobeCellData[base + s.x + dim * (s.y + dim * s.z)];
+  // Start tets packed at the tets' neighbour width (tetraprobeTetNb) from tetraprobeCellBrickOffset.
+  uint e = uint(dim * dim * dim * brick + s.x + dim * (s.y + dim * s.z)), nb = tetraprobeTetNb();
+  uint bit = e * nb, w = uint(tetraprobeCellBrickOffset) + (bit >> 5u), sh = bit & 31u;
+  uint v = (uint(tetraprobeCellData[w]) >> sh) | ((uint(tetraprobeCellData[w + 1u]) << 1u) << (31u - sh));
+  return int(v & tetraprobeTetMask(nb));
 }
 
 // One walk from tet `cur` (ProbeQuery's walk()): false when it runs out of steps, or cycles (float rows can

@@ -248,7 +248,8 @@ std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion)
        level.sh.size() * sizeof(ShHalf)},  // as the file and the GPU hold them (the CPU expands to float)
       {"tets", gpuTetBytes(level.probes.size(), level.tets.size())},  // packed (gpu_tets.h)
       {"start_bricks",
-       startBricksBytes(query.cellGrid())},  // the GPU's start (the CPU's BSP is not read there)
+       startBricksBytes(query.cellGrid(),
+                        level.tets.size())},  // the GPU's start (the CPU's BSP is not read there)
       {"outer_cells", query.outerCells().size() * sizeof(GpuOuterCell)},
       {"start_grid", query.startGrid().startTet.size() * sizeof(int32_t)},
   };

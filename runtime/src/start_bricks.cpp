@@ -4,6 +4,8 @@
 // issue 30, bricked over the cell grid's hash so that empty space costs nothing.
 #include "tetraprobe/runtime/start_bricks.h"
 
+#include "tetraprobe/runtime/gpu_tets.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -40,10 +42,12 @@ int32_t walkToward(const Level& level, int32_t cur, const glm::vec3& x) {
 
 }  // namespace
 
-size_t startBricksBytes(const CellGrid& cellGrid, int32_t dim) {
+size_t startBricksBytes(const CellGrid& cellGrid, size_t tets, int32_t dim) {
   const size_t cells = occupiedCells(cellGrid);
   if (cells == 0) return 0;
-  return cellGrid.slots.size() * sizeof(CellSlot) + cells * size_t(dim) * size_t(dim) * size_t(dim) * 4;
+  const uint64_t entries = uint64_t(cells) * uint64_t(dim) * uint64_t(dim) * uint64_t(dim);
+  return cellGrid.slots.size() * sizeof(CellSlot) +
+         size_t((entries * bitsFor(tets) + 31u) / 32u + 1u) * sizeof(uint32_t);
 }
 
 StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const CellGrid& cellGrid,

@@ -252,6 +252,8 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     for (const CellSlot& s : bricks.slots)
       ok = ok && (s.key[0] == INT32_MIN || (s.root >= 0 && s.root < brickCount));
     for (int32_t t : bricks.startTet) ok = ok && t >= 0 && t < tetCount;
+    // The shader addresses the packed start tets' bits in 32 bits.
+    ok = ok && uint64_t(bricks.startTet.size()) * bitsFor(level.tets.size()) < (uint64_t(1) << 32);
     if (!ok || bricks.slots.size() + bricks.startTet.size() > size_t(INT32_MAX / 4)) {
       if (error) *error = "cell grid has an index out of range";
       return fail();
@@ -318,7 +320,16 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   cellHeader.brickDim = bricks.dim;
   appendBytes(data[kGpuBindingCells], &cellHeader, 1);
   appendBytes(data[kGpuBindingCells], bricks.slots.data(), bricks.slots.size());
-  appendBytes(data[kGpuBindingCells], bricks.startTet.data(), bricks.startTet.size());
+  {
+    // The start tets at the tets' neighbour width (gpu_tets.h), then a zero word (the shader reads the next
+    // word of every field).
+    const uint32_t bits = bitsFor(level.tets.size());
+    std::vector<uint32_t> packedStarts((uint64_t(bricks.startTet.size()) * bits + 31u) / 32u + 1u, 0u);
+    for (size_t e = 0; e < bricks.startTet.size(); ++e)
+      putBits(packedStarts.data(), uint64_t(e) * bits, bits, uint32_t(bricks.startTet[e]));
+    if (!bricks.startTet.empty())
+      appendBytes(data[kGpuBindingCells], packedStarts.data(), packedStarts.size());
+  }
 
   const LevelOcclusion& occ = level.occlusion;
   GpuOcclusionHeader occHeader{};

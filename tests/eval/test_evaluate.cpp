@@ -258,9 +258,12 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   const uint64_t stride = (4 * (bits(level.probes.size() - 1) + bits(level.tets.size())) + 31) / 32;
   EXPECT_LT(stride, 8u);
   EXPECT_EQ(section("tets"), 16 + (level.tets.size() * stride + 4) * 4);
-  // The GPU's start (start bricks), as the upload packs them: slots and one start tet a sub-cell.
+  // The GPU's start (start bricks), as the upload packs them: slots, then one start tet a sub-cell at the
+  // tets' neighbour width, then a zero word.
   const StartBricks bricks = buildStartBricks(level, query.startGrid(), query.cellGrid());
-  EXPECT_EQ(section("start_bricks"), bricks.slots.size() * 16 + bricks.startTet.size() * 4);
+  EXPECT_EQ(
+      section("start_bricks"),
+      bricks.slots.size() * 16 + ((bricks.startTet.size() * bits(level.tets.size()) + 31) / 32 + 1) * 4);
   EXPECT_GT(section("start_bricks"), 0u);
   EXPECT_EQ(section("outer_cells"), query.outerCells().size() * 48);  // GpuOuterCell: octahedral normals
   EXPECT_GT(section("outer_cells"), 0u);

@@ -18,6 +18,7 @@
 #include "tetraprobe/runtime/gpu_tets.h"
 #include "tetraprobe/runtime/probe_update.h"
 #include "tetraprobe/runtime/query.h"
+#include "tetraprobe/runtime/start_bricks.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
 #include "vulkan_context.h"
 
@@ -227,6 +228,33 @@ TEST(LevelUpload, TetBufferHoldsEveryTetPackedAndItsCountedBytes) {
     }
   }
   for (size_t w = level.tets.size() * packing.strideUints; w < words.size(); ++w) EXPECT_EQ(words[w], 0u);
+}
+
+// The start bricks' entries are packed at the tets' neighbour width after the hash slots: each unpacks to
+// buildStartBricks' start tet, and the buffer holds what startBricksBytes counts (small cells: many bricks).
+TEST(LevelUpload, StartBrickEntriesUnpackToTheBricksStartTets) {
+  const Level level = occludedLevel();
+  const ProbeQuery query(level, 0.5f);
+  std::string error;
+  PackedLevelBuffers packed;
+  ASSERT_TRUE(
+      packLevelBuffers(level, query.startGrid(), query.outerCells(), query.cellGrid(), packed, &error))
+      << error;
+  const StartBricks bricks = buildStartBricks(level, query.startGrid(), query.cellGrid());
+  ASSERT_GT(bricks.startTet.size(), 4096u);
+  const std::vector<char>& bytes = packed.bytes[kGpuBindingCells];
+  const size_t counted = sizeof(GpuCellGridHeader) + startBricksBytes(query.cellGrid(), level.tets.size());
+  EXPECT_EQ(bytes.size(), std::max<size_t>(64, (counted + 63) / 64 * 64));
+  GpuCellGridHeader header;
+  std::memcpy(&header, bytes.data(), sizeof(header));
+  const size_t first = sizeof(header) + size_t(header.brickOffset) * 4;
+  ASSERT_LE(first, bytes.size());
+  std::vector<uint32_t> words((bytes.size() - first) / 4);
+  std::memcpy(words.data(), bytes.data() + first, words.size() * 4);
+  const uint32_t width = bitsFor(level.tets.size());
+  for (size_t e = 0; e < bricks.startTet.size(); ++e)
+    ASSERT_EQ(int32_t(getBits(words.data(), uint64_t(e) * width, width)), bricks.startTet[e])
+        << "entry " << e;
 }
 
 // A level the shader would read out of bounds is refused before anything is created or recorded.

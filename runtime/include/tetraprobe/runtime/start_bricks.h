@@ -45,7 +45,9 @@ struct StartBricks {
 StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const CellGrid& cellGrid,
                              int32_t dim = kStartBrickDim);
 
-// What the bricks take on the GPU for `cellGrid`: 16 bytes a hash slot, 4 a sub-cell; 0 without cells.
-size_t startBricksBytes(const CellGrid& cellGrid, int32_t dim = kStartBrickDim);
+// What the bricks take on the GPU for `cellGrid` on a level of `tets` tets: 16 bytes a hash slot, and the
+// sub-cells' start tets packed at bitsFor(tets) bits each (the tets' neighbour width, gpu_tets.h) in whole
+// words plus one zero word; 0 without cells.
+size_t startBricksBytes(const CellGrid& cellGrid, size_t tets, int32_t dim = kStartBrickDim);
 
 }  // namespace tetraprobe
