@@ -45,7 +45,7 @@
 // The tets (tetraprobe::GpuTetHeader, runtime/gpu_tets.h): a header, then one record of tetraprobeTetStride
 // uints a tet, fields least significant bit first: v[0..3] (probe indices, tetraprobeTetVertexBits each), then
 // n[0..3] (tetraprobeTetNeighbourBits each: the tet across the face opposite v[i], + 1; 0 on the hull); then
-// four zero uints. Read them with tetraprobeTetVertices and tetraprobeTetNeighbour (tetraprobe_tets.glsl).
+// one zero uint. Read them with tetraprobeTetVertices and tetraprobeTetNeighbour (tetraprobe_tets.glsl).
 // Barycentrics come from the four probe positions (tetraprobeBaryFrame).
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 0) readonly buffer TetraprobeTets {
   uint tetraprobeTetVertexBits;     // offset 0

@@ -30,6 +30,10 @@ uint32_t getBits(const uint32_t* words, uint64_t bit, uint32_t width) {
   return uint32_t(v & ((uint64_t(1) << width) - 1u));
 }
 
+size_t packedFieldWords(uint64_t fields, uint32_t width) {
+  return size_t((fields * width + 31u) / 32u + 1u);
+}
+
 GpuTetPacking gpuTetPacking(size_t probes, size_t tets) {
   GpuTetPacking p;
   p.vertexBits = bitsFor(probes > 0 ? uint64_t(probes) - 1u : 0u);

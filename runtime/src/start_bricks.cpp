@@ -47,7 +47,7 @@ size_t startBricksBytes(const CellGrid& cellGrid, size_t tets, int32_t dim) {
   if (cells == 0) return 0;
   const uint64_t entries = uint64_t(cells) * uint64_t(dim) * uint64_t(dim) * uint64_t(dim);
   return cellGrid.slots.size() * sizeof(CellSlot) +
-         size_t((entries * bitsFor(tets) + 31u) / 32u + 1u) * sizeof(uint32_t);
+         packedFieldWords(entries, bitsFor(tets)) * sizeof(uint32_t);
 }
 
 StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const CellGrid& cellGrid,

@@ -324,7 +324,7 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
     // The start tets at the tets' neighbour width (gpu_tets.h), then a zero word (the shader reads the next
     // word of every field).
     const uint32_t bits = bitsFor(level.tets.size());
-    std::vector<uint32_t> packedStarts((uint64_t(bricks.startTet.size()) * bits + 31u) / 32u + 1u, 0u);
+    std::vector<uint32_t> packedStarts(packedFieldWords(bricks.startTet.size(), bits), 0u);
     for (size_t e = 0; e < bricks.startTet.size(); ++e)
       putBits(packedStarts.data(), uint64_t(e) * bits, bits, uint32_t(bricks.startTet[e]));
     if (!bricks.startTet.empty())

@@ -249,7 +249,7 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   EXPECT_EQ(section("positions"), level.probes.size() * 12);
   EXPECT_EQ(section("sh"), level.probes.size() * 56);  // ShHalf, as stored and uploaded
   // The GPU's packed tets (gpu_tets.h): a 16-byte header, then ceil(4 (bits of a probe index + bits of a
-  // neighbour code) / 32) words a tet, then four zero words.
+  // neighbour code) / 32) words a tet, then one zero word.
   const auto bits = [](uint64_t v) {
     uint64_t b = 1;
     while (b < 32 && (v >> b) != 0) ++b;
@@ -257,7 +257,7 @@ TEST(StandardMethods, TetBytesCountEverySectionTheLookupReads) {
   };
   const uint64_t stride = (4 * (bits(level.probes.size() - 1) + bits(level.tets.size())) + 31) / 32;
   EXPECT_LT(stride, 8u);
-  EXPECT_EQ(section("tets"), 16 + (level.tets.size() * stride + 4) * 4);
+  EXPECT_EQ(section("tets"), 16 + (level.tets.size() * stride + 1) * 4);
   // The GPU's start (start bricks), as the upload packs them: slots, then one start tet a sub-cell at the
   // tets' neighbour width, then a zero word.
   const StartBricks bricks = buildStartBricks(level, query.startGrid(), query.cellGrid());

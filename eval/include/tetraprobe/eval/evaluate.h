@@ -142,8 +142,8 @@ struct LookupMethod {
 // What the tet lookup (ProbeQuery::irradiance and shaders/tetraprobe.glsl) reads, section by section, in the
 // GPU layout: probe positions (12 bytes each), SH (56, half precision as uploaded), tets (packed: gpuTetBytes,
 // gpu_tets.h), the cell grid's hash slots and start bricks (startBricksBytes, start_bricks.h: the GPU's
-// start; the CPU descends the cell grid's BSP instead), outer cells (48: GpuOuterCell, normals as octahedral codes), the coarse start grid (4
-// bytes a cell) and, when `occlusion`, the level's occlusion data as the GPU packs it (gpuOcclusionBytes,
+// start; the CPU descends the cell grid's BSP instead), outer cells (48: GpuOuterCell, normals as
+// octahedral codes), the coarse start grid (4 bytes a cell) and, when `occlusion`, the level's occlusion data as the GPU packs it (gpuOcclusionBytes,
 // gpu_layout.h). The query's structures are counted (those the level stores, or those it built on load).
 std::vector<ByteSection> tetLookupBytes(const ProbeQuery& query, bool occlusion);
 uint64_t totalBytes(const std::vector<ByteSection>& sections);

@@ -29,8 +29,8 @@ enum GpuBinding : uint32_t {
 };
 
 // Header of the TetraprobeTets buffer (16 bytes): the tets packed as gpu_tets.h says (GpuTetPacking), one
-// record of strideUints words a tet from offset 16, then kGpuTetTailUints zero words (the shader reads a
-// record's first four words at once, however short the record).
+// record of strideUints words a tet from offset 16, then kGpuTetTailUints zero words (the shader reads the
+// word after every field's first, also after the last record's).
 struct GpuTetHeader {
   uint32_t vertexBits;     // uint tetraprobeTetVertexBits: bits of a probe index
   uint32_t neighbourBits;  // uint tetraprobeTetNeighbourBits: bits of a neighbour code (index + 1; 0 = hull)
@@ -41,7 +41,7 @@ static_assert(std::is_standard_layout_v<GpuTetHeader>);
 static_assert(sizeof(GpuTetHeader) == 16 && offsetof(GpuTetHeader, neighbourBits) == 4 &&
                   offsetof(GpuTetHeader, strideUints) == 8 && offsetof(GpuTetHeader, count) == 12,
               "TetraprobeTets header: 16 bytes, records at offset 16");
-inline constexpr uint32_t kGpuTetTailUints = 4;
+inline constexpr uint32_t kGpuTetTailUints = 1;
 
 // The probe buffer (uint data[]): Level::probes as is (3 floats per probe, x y z, local frame) from index 0,
 // then one ShHalf per probe (sh_half.h: 27 binary16 coefficients, coefficient-major then r,g,b, and the

@@ -24,6 +24,10 @@ void putBits(uint32_t* words, uint64_t bit, uint32_t width, uint32_t value);
 // The `width`-bit field (width in [1, 32]) at bit `bit` of `words`.
 uint32_t getBits(const uint32_t* words, uint64_t bit, uint32_t width);
 
+// Words holding `fields` fields of `width` bits packed back to back, plus one zero word: the shader reads the
+// word after each field's first, so the last field's next word must exist.
+size_t packedFieldWords(uint64_t fields, uint32_t width);
+
 struct GpuTetPacking {
   uint32_t vertexBits = 1;     // bits of a probe index: bitsFor(probes - 1)
   uint32_t neighbourBits = 1;  // bits of a neighbour code (index + 1, 0 = none): bitsFor(tets)
