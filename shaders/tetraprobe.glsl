@@ -50,6 +50,7 @@
 #include "tetraprobe_sh.glsl"           // the SH basis and irradiance (runtime/sh.h)
 #include "tetraprobe_tets.glsl"         // locations, probe positions, barycentric weights
 #include "tetraprobe_variant.glsl"      // specialization constants
+// Not included here: tetraprobe_upsample.glsl, the rules of the half-resolution lookup (an engine option).
 
 // Irradiance E in W/m^2 at local position localPos on a surface with unit normal `normal`. The level's
 // occlusion (if any) drops the probes the point cannot see, inside the hull and (through the hull tet of the

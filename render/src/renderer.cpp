@@ -24,9 +24,12 @@
 #include "direct.comp.h"
 #include "grid_texture.h"
 #include "lighting.comp.h"
+#include "lighting_edges.comp.h"
 #include "lighting_grid.comp.h"
 #include "lighting_grid_texture.comp.h"
+#include "lighting_half.comp.h"
 #include "lighting_nearest.comp.h"
+#include "lighting_upsample.comp.h"
 #include "pipelines.h"
 #include "shadow_lights.h"
 #include "tetraprobe/runtime/vulkan_upload.h"
@@ -272,6 +275,10 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
                  options.benchAmbient || options.benchGrid))
     throw std::runtime_error("render: shader variants and bench passes need a level");
   if (options.benchVariants.size() > 16) throw std::runtime_error("render: at most 16 bench variants");
+  if (options.halfResolution &&
+      (!level || !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect)))
+    throw std::runtime_error(
+        "render: the half-resolution lookup needs a level and mode irradiance or indirect");
   if (options.benchGrid &&
       (options.benchGrid->dims.x < 2 || options.benchGrid->dims.y < 2 || options.benchGrid->dims.z < 2 ||
        !options.benchGrid->sh || !(options.benchGrid->step > 0.0)))
@@ -330,6 +337,23 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       ctx.createImage(width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                       VK_IMAGE_ASPECT_DEPTH_BIT, cleanup);
   const GpuImage* readImages[kImageCount] = {&color, &gPosition, &gNormal, &gAlbedo};
+  // The half-resolution lookup (tetraprobe_upsample.glsl): pass 1's E at ceil(W/2) x ceil(H/2), pass 2's image.
+  const bool half = options.halfResolution;
+  const uint32_t halfW = (width + 1) / 2, halfH = (height + 1) / 2;
+  GpuImage halfE, upsampled;
+  GpuBuffer upsampledReadback,
+      edgePixels;  // edgePixels: lighting_upsample.comp's list for lighting_edges.comp
+  const VkDeviceSize edgeHeaderBytes = 5 * sizeof(uint32_t);
+  if (half) {
+    edgePixels = ctx.createBuffer(edgeHeaderBytes + VkDeviceSize(width) * height * sizeof(uint32_t),
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                      VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                  VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, cleanup);
+    halfE = ctx.createImage(halfW, halfH, kGbufferFormat, VK_IMAGE_USAGE_STORAGE_BIT, colorAspect, cleanup);
+    upsampled =
+        ctx.createImage(width, height, kGbufferFormat,
+                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, colorAspect, cleanup);
+  }
   const VkDeviceSize imageBytes = VkDeviceSize(width) * height * 4 * sizeof(float);
   GpuBuffer readback[kImageCount];
   for (auto& b : readback)
@@ -408,9 +432,12 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   VkDescriptorSetLayoutBinding levelBindings[kGpuBindingCount];
   levelDescriptorBindings(VK_SHADER_STAGE_COMPUTE_BIT, 0, levelBindings);
   const uint32_t levelBindingCount = level ? uint32_t(kGpuBindingCount) : 1u;  // the grid: binding 0 only
-  VkDescriptorSetLayoutBinding imageBindings[5];
-  for (uint32_t i = 0; i < 5; ++i)
-    imageBindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  // 5, 6, 7: the half-resolution lookup's two images and its list of pixels looked up at full resolution.
+  VkDescriptorSetLayoutBinding imageBindings[8];
+  const uint32_t imageBindingCount = half ? 8u : 5u;
+  for (uint32_t i = 0; i < imageBindingCount; ++i)
+    imageBindings[i] = {i, i == 7 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1,
+                        VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   const VkDescriptorSetLayoutBinding directBindings[3] = {
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
@@ -422,7 +449,7 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
   const VkDescriptorSetLayout setLayouts[4] = {
       render_detail::createSetLayout(device, levelBindings, levelBindingCount, cleanup),
-      render_detail::createSetLayout(device, imageBindings, 5, cleanup),
+      render_detail::createSetLayout(device, imageBindings, imageBindingCount, cleanup),
       render_detail::createSetLayout(device, directBindings, full ? 3u : 0u, cleanup),
       render_detail::createSetLayout(device, gridBindings, options.benchGrid ? 2u : 0u, cleanup)};
   const VkPipelineLayout computeLayout = render_detail::createPipelineLayout(
@@ -438,11 +465,12 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   const uint32_t* lightingCode = options.lightingSpirv ? options.lightingSpirv : kSpirv_lighting_comp;
   const size_t lightingBytes =
       options.lightingSpirv ? options.lightingSpirvBytes : sizeof(kSpirv_lighting_comp);
-  auto lookup = [&](const ShaderVariant& v) {
+  auto lookupCode = [&](const ShaderVariant& v, const uint32_t* code, size_t bytes) {
     ShaderSpecialization spec;
     shaderSpecialization(v, 0, spec);
-    return compute(lightingCode, lightingBytes, &spec.info);
+    return compute(code, bytes, &spec.info);
   };
+  auto lookup = [&](const ShaderVariant& v) { return lookupCode(v, lightingCode, lightingBytes); };
   VkPipeline lightingPipeline = VK_NULL_HANDLE, directPipeline = VK_NULL_HANDLE,
              debugPipeline = VK_NULL_HANDLE;
   if (usesLighting(mode)) lightingPipeline = level ? lookup(variant) : compute(grid->spirv, grid->spirvBytes);
@@ -457,6 +485,14 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     gridTextures = render_detail::createGridTextures(ctx, *options.benchGrid, origin, cleanup);
     benchPipelines.emplace_back("grid_texture", compute(kSpirv_lighting_grid_texture_comp,
                                                         sizeof(kSpirv_lighting_grid_texture_comp)));
+  }
+  // The half-resolution lookup in the level's variant: pass 1 (lookup per 2x2 block), pass 2 (upsample).
+  VkPipeline halfPipeline = VK_NULL_HANDLE, upsamplePipeline = VK_NULL_HANDLE, edgesPipeline = VK_NULL_HANDLE;
+  if (half) {
+    halfPipeline = lookupCode(variant, kSpirv_lighting_half_comp, sizeof(kSpirv_lighting_half_comp));
+    upsamplePipeline = compute(kSpirv_lighting_upsample_comp, sizeof(kSpirv_lighting_upsample_comp));
+    edgesPipeline = lookupCode(variant, kSpirv_lighting_edges_comp, sizeof(kSpirv_lighting_edges_comp));
+    upsampledReadback = ctx.createBuffer(imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hostMem, cleanup);
   }
   if (full) directPipeline = compute(kSpirv_direct_comp, sizeof(kSpirv_direct_comp));
   if (mode == RenderMode::kProbes)
@@ -502,8 +538,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   VkDescriptorPool descriptorPool;
   {
     const VkDescriptorPoolSize sizes[3] = {
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 4},
-        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 5},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 5},
+        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 7},
         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1 + render_detail::kGridTextureCount}};
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     info.maxSets = 5;
@@ -543,10 +579,11 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   else
     writeBuffer(sets[0], 0, gridBuffer.buffer);
   {
-    const GpuImage* bound[5] = {&gPosition, &gNormal, &gAlbedo, &color, &gEmission};
-    VkDescriptorImageInfo infos[5];
-    VkWriteDescriptorSet writes[5];
-    for (uint32_t i = 0; i < 5; ++i) {
+    const GpuImage* bound[7] = {&gPosition, &gNormal, &gAlbedo, &color, &gEmission, &halfE, &upsampled};
+    VkDescriptorImageInfo infos[7];
+    VkWriteDescriptorSet writes[7];
+    const uint32_t imageCount = std::min(imageBindingCount, 7u);  // binding 7 is a buffer
+    for (uint32_t i = 0; i < imageCount; ++i) {
       infos[i] = {VK_NULL_HANDLE, bound[i]->view, VK_IMAGE_LAYOUT_GENERAL};
       writes[i] = VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       writes[i].dstSet = sets[1];
@@ -555,8 +592,9 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       writes[i].pImageInfo = &infos[i];
     }
-    vkUpdateDescriptorSets(device, 5, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, imageCount, writes, 0, nullptr);
   }
+  if (half) writeBuffer(sets[1], 7, edgePixels.buffer);
   if (full) {
     writeBuffer(sets[2], 0, lightBuffer.buffer);
     writeBuffer(sets[2], 1, matrixBuffer.buffer);
@@ -657,6 +695,11 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   imageBarrier(cmd, color.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
                VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+  if (half)
+    for (VkImage image : {halfE.image, upsampled.image})
+      imageBarrier(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
+                   VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
   clock.end("gbuffer");
   ComputePush push{};
   push.size[0] = int32_t(width);
@@ -688,6 +731,32 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   };
   const uint32_t groupsX = (width + 7) / 8, groupsY = (height + 7) / 8;
   for (const auto& [name, pipeline] : benchPipelines) dispatch(pipeline, name, push, groupsX, groupsY);
+  if (half) {
+    dispatch(halfPipeline, "lookup_half", push, (halfW + 7) / 8, (halfH + 7) / 8);
+    // The list starts empty each frame: 0 workgroups (y = z = 1), 0 pixels.
+    cmd = clock.begin();
+    const uint32_t empty[5] = {0, 1, 1, 0, 0};
+    vkCmdUpdateBuffer(cmd, edgePixels.buffer, 0, sizeof(empty), empty);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 4, sets, 0, nullptr);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, upsamplePipeline);
+    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+    vkCmdDispatch(cmd, groupsX, groupsY, 1);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, anyStage, VK_ACCESS_SHADER_WRITE_BIT, anyAccess);
+    clock.end("upsample");
+    cmd = clock.begin();
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_SHADER_WRITE_BIT,
+                  VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 4, sets, 0, nullptr);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, edgesPipeline);
+    vkCmdPushConstants(cmd, computeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+    vkCmdDispatchIndirect(cmd, edgePixels.buffer, 0);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, anyStage, VK_ACCESS_SHADER_WRITE_BIT, anyAccess);
+    clock.end("lookup_edges");
+  }
   if (lightingPipeline != VK_NULL_HANDLE) {
     // Warm-up: one workgroup (pixel 0,0 only). lavapipe JIT-compiles a pipeline at its first dispatch; this
     // keeps that compile out of the timed full-screen pass of a single frame.
@@ -740,6 +809,9 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     region.imageExtent = {width, height, 1};
     vkCmdCopyImageToBuffer(copyCmd, readImages[i]->image, VK_IMAGE_LAYOUT_GENERAL, readback[i].buffer, 1,
                            &region);
+    if (half && i == 0)
+      vkCmdCopyImageToBuffer(copyCmd, upsampled.image, VK_IMAGE_LAYOUT_GENERAL, upsampledReadback.buffer, 1,
+                             &region);
   }
   memoryBarrier(copyCmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                 VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_HOST_READ_BIT);
@@ -769,16 +841,18 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   submitAndWait(ctx, copyCmd, fence);
 
   RenderResult result;
-  Image* outs[kImageCount] = {&result.color, &result.position, &result.normal, &result.albedo};
-  for (int i = 0; i < kImageCount; ++i) {
+  Image* outs[kImageCount + 1] = {&result.color, &result.position, &result.normal, &result.albedo,
+                                  &result.halfResolution};
+  for (int i = 0; i < kImageCount + (half ? 1 : 0); ++i) {
     Image& img = *outs[i];
+    const GpuBuffer& source = i < kImageCount ? readback[i] : upsampledReadback;
     img.width = view.width;
     img.height = view.height;
     img.rgba.resize(size_t(width) * height * 4);
     void* mapped;
-    vkCheck(vkMapMemory(device, readback[i].memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (readback)");
+    vkCheck(vkMapMemory(device, source.memory, 0, VK_WHOLE_SIZE, 0, &mapped), "vkMapMemory (readback)");
     std::memcpy(img.rgba.data(), mapped, img.rgba.size() * sizeof(float));
-    vkUnmapMemory(device, readback[i].memory);
+    vkUnmapMemory(device, source.memory);
   }
   result.variant = variant;
   result.deviceName = ctx.deviceName();

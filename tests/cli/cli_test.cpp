@@ -1048,6 +1048,20 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
   EXPECT_GT(j.at("grid").at("texture_bytes").get<double>(), 0.0);
   EXPECT_LE(j.at("grid").at("bytes").get<double>(), j.at("tet_lookup_bytes").get<double>());
   EXPECT_TRUE(j.at("goal_met").is_boolean());
+  // The half-resolution lookup: its three passes, pixel shares that add up to every geometry pixel, and its
+  // difference from the full pass.
+  const auto& half = j.at("half_resolution");
+  EXPECT_NEAR(half.at("total_ms").get<double>(),
+              half.at("lookup_half_ms").get<double>() + half.at("upsample_ms").get<double>() +
+                  half.at("lookup_edges_ms").get<double>(),
+              1e-9);
+  EXPECT_NEAR(half.at("pixels_interpolated").get<double>() + half.at("pixels_own_lookup").get<double>() +
+                  half.at("pixels_full_lookup").get<double>(),
+              1.0, 1e-9);
+  EXPECT_GE(half.at("pixels_own_lookup").get<double>(), 0.25)
+      << "a block's representative: 1 pixel in 4 or more";
+  EXPECT_GE(half.at("error_vs_full").at("mean_rel").get<double>(), 0.0);
+  EXPECT_LT(half.at("error_vs_full").at("mean_rel").get<double>(), 0.05);
 
   const CliRun inspect = run("inspect " + level + " --json");
   ASSERT_EQ(inspect.code, 0) << inspect.err;
@@ -1058,6 +1072,16 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
   ASSERT_EQ(render.code, 0) << render.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(path("r.json"))).at("variant").get<std::string>(), variant);
   EXPECT_EQ(run("bench render " + path("box.obj").string() + " " + level + " --also l3").code, 2);
+  // render --half-res writes the upsampled image; it has no meaning for the debug views.
+  const CliRun halfRender = run("render " + path("box.obj").string() + " " + level + view +
+                                " --mode indirect --half-res -o " + path("h.png").string());
+  ASSERT_EQ(halfRender.code, 0) << halfRender.err;
+  EXPECT_NE(halfRender.out.find("upsample"), std::string::npos) << halfRender.out;
+  EXPECT_TRUE(fs::exists(path("h.png")));
+  EXPECT_EQ(run("render " + path("box.obj").string() + " " + level + view + " --mode tets --half-res -o " +
+                path("t.png").string())
+                .code,
+            2);
 }
 
 // eval scores every method on the same points, the grid included, and writes the Markdown table, the SVG plot

@@ -15,6 +15,7 @@
 #include "args.h"
 #include "commands.h"
 #include "eval_plot.h"
+#include "half_resolution_report.h"
 #include "pipeline.h"
 #include "pipeline_options.h"
 #include "render_view.h"
@@ -504,6 +505,24 @@ int cmdEval(int argc, char** argv) {
       measure(lut, coherent, random, opt.threads, gpu ? &gpuView : nullptr, 3, &gpuError);
   for (EvalReport& report : reports) applyMeasured(report, measured);
   if (!gpuError.empty()) std::printf("tetraprobe eval: no GPU timing (%s)\n", gpuError.c_str());
+  // The half-resolution lookup (an engine option) at the same view: its passes and its difference from the
+  // full-resolution pass of the same render (the tet method's level, median of 3 frames after 1 warm-up).
+  nlohmann::json halfJson;
+  if (gpu && gpuError.empty()) {
+    RenderOptions halfOptions;
+    halfOptions.halfResolution = true;
+    halfOptions.warmupFrames = 1;
+    halfOptions.timedFrames = 3;
+    const ProbeQuery halfQuery(*level);
+    const RenderResult r = renderLevel(setup.mesh, *level, halfQuery, gpuView, halfOptions);
+    std::printf(
+        "tetraprobe eval: half-resolution lookup at 1280x720 (an engine option; full lighting pass %.1f "
+        "ms):\n",
+        r.timings.lightingMs);
+    printHalfResolution(r, r.timings.lightingMs, 0.0);
+    halfJson = halfResolutionJson(r, r.timings.lightingMs, 0.0);
+    halfJson["full_ms"] = r.timings.lightingMs;
+  }
 
   if (occMode != OcclusionMode::kNone)
     std::printf(
@@ -716,6 +735,7 @@ int cmdEval(int argc, char** argv) {
                    {"gpu", gpu && gpuError.empty() ? "1280x720 lighting pass, median of 3 renders"
                                                    : (gpu ? "failed: " + gpuError : "not measured")}};
     j["grid_notes"] = lut.notes;
+    if (!halfJson.is_null()) j["half_resolution"] = halfJson;
     if (!sweepRows.empty()) {
       j["sweep"] = nlohmann::json::array();
       for (const SweepRow& row : sweepRows) {

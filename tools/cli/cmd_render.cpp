@@ -46,7 +46,7 @@ bool gpuMode(const std::string& mode, RenderMode* out) {
 
 // Options that only the traced modes (reference, error) take, and those only the GPU modes take.
 constexpr const char* kTracedOnly[] = {"--samples", "--max-seconds", "--bounces", "--seed", "--threads"};
-constexpr const char* kGpuOnly[] = {"--frames", "--shadow-map-size"};
+constexpr const char* kGpuOnly[] = {"--frames", "--shadow-map-size", "--half-res"};
 
 // Above this mean relative standard error the reference's own noise shows in the error image (0.1 is
 // about 0.14 stops per pixel).
@@ -194,7 +194,12 @@ int cmdRender(int argc, char** argv) {
            {"--json", "", "FILE", "write the figures printed as JSON (GPU modes: per-pass GPU times)", ""},
            {"--frames", "", "N", "GPU modes: timed frames (median; with --json 2 warm-up frames before)",
             "9"},
-           {"--shadow-map-size", "", "N", "full: texels per side of each shadow-map layer", "1024"}}));
+           {"--shadow-map-size", "", "N", "full: texels per side of each shadow-map layer", "1024"},
+           {"--half-res", "", "",
+            "irradiance/indirect: the half-resolution lookup an engine may choose (one lookup a 2x2 block,\n"
+            "upsampled by depth and normal, full lookups where no sample matches; shaders/"
+            "tetraprobe_upsample.glsl)",
+            ""}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
   if (!args.has("--output")) throw UsageError("missing -o IMAGE");
@@ -224,7 +229,10 @@ int cmdRender(int argc, char** argv) {
     throw UsageError("--exposure does not apply to --mode " + mode + " (its colours are fixed)");
   if (args.has("--shadow-map-size") && view.mode != RenderMode::kFull)
     throw UsageError("--shadow-map-size applies to --mode full only");
+  if (args.has("--half-res") && !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect))
+    throw UsageError("--half-res applies to --mode irradiance and indirect only");
   RenderOptions options;
+  options.halfResolution = args.has("--half-res");
   if (!traced) {
     options.shadowMapSize = args.integer("--shadow-map-size");
     if (options.shadowMapSize < 16 || options.shadowMapSize > 8192)
@@ -262,7 +270,12 @@ int cmdRender(int argc, char** argv) {
                  "tetraprobe render: warning: the level records no probe kinds (baked before they were "
                  "stored): every probe is drawn white\n");
   const auto t0 = std::chrono::steady_clock::now();
-  const RenderResult result = renderLevel(toRenderMesh(scene), level, query, view, options);
+  RenderResult result = renderLevel(toRenderMesh(scene), level, query, view, options);
+  if (options.halfResolution) {  // the image written: the half-resolution answer, a = 1 on geometry
+    result.color = std::move(result.halfResolution);
+    for (size_t i = 3; i < result.color.rgba.size(); i += 4)
+      result.color.rgba[i] = result.color.rgba[i] != 0.0f;
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   std::string error;

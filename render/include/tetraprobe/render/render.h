@@ -172,6 +172,11 @@ struct RenderOptions {
   std::vector<ShaderVariant> benchVariants;
   bool benchAmbient = false;
   const RenderGrid* benchGrid = nullptr;
+  // The half-resolution lookup as well (shaders/tetraprobe_upsample.glsl: lighting_half.comp, one lookup per
+  // 2x2 block, then lighting_upsample.comp), in the lighting pass's variant, on the same G-buffer after the
+  // bench passes; PassTiming "lookup_half" and "upsample"; its image in RenderResult::halfResolution. Levels,
+  // modes kIrradiance and kIndirect only.
+  bool halfResolution = false;
 };
 
 struct RenderResult {
@@ -179,6 +184,9 @@ struct RenderResult {
   Image position;  // level local frame, metres; a = 1 where geometry, all 0 elsewhere
   Image normal;    // unit normal of the visible triangle (a = 1 where geometry)
   Image albedo;    // albedo of the visible triangle (a = 1 where geometry)
+  // With RenderOptions::halfResolution: the upsampled half-resolution lookup, rgb as `color`, a = how each
+  // pixel was answered: 0 background, 1 interpolated, 2 its block's own lookup, 3 looked up at full resolution.
+  Image halfResolution;
   RenderTimings timings;
   ShaderVariant variant;   // the lighting pass's (levels only)
   std::string deviceName;  // the Vulkan device's (VkPhysicalDeviceProperties::deviceName)
