@@ -24,6 +24,10 @@
 //   and outer cell in after a failed walk, to compare against. An empty level gives tet -1 and E = 0.
 //   The CPU evaluates weights in double, the GPU in float: inside the hull both give the same field (up to
 //   rounding), outside too (the outer cells' answer does not depend on the hull face the walk leaves by).
+// - tetraprobeLocateWithin(localPos, hint, hintSteps) bounds the hint's walk by hintSteps instead, and
+//   tetraprobeIrradianceLocated(loc, localPos, normal) shades an already located point: an engine that keeps
+//   each pixel's tet for the next frame locates with the reprojected pixel's old tet as the hint, shades, and
+//   stores loc.tet (shaders/lighting_temporal.comp; docs/rendering.md, "Temporal start").
 // - Bindings: the five read-only storage buffers of tetraprobe_layout.glsl in set TETRAPROBE_SET at bindings
 //   TETRAPROBE_BINDING + 0..5 (defaults 0 and 0..5; define the macros before including to move them).
 //   Upload them with tetraprobe::uploadLevelBuffers and bind with tetraprobe::writeLevelDescriptors
@@ -58,8 +62,15 @@
 // that sees none blends into min(blend dominated by the nearest probe in front of the surface, unoccluded
 // blend) per channel. Mirrors
 // ProbeQuery::irradiance and occludedIrradiance (runtime/occlusion.h).
+vec3 tetraprobeIrradianceLocated(TetraprobeLocation loc, vec3 localPos, vec3 normal);
 vec3 tetraprobeIrradiance(vec3 localPos, vec3 normal) {
-  TetraprobeLocation loc = tetraprobeLocate(localPos, -1);
+  return tetraprobeIrradianceLocated(tetraprobeLocate(localPos, -1), localPos, normal);
+}
+
+// tetraprobeIrradiance at a point already located (loc = tetraprobeLocate(localPos, hint) or
+// tetraprobeLocateWithin): for an engine that starts the walk from a hint, such as last frame's tet of the
+// pixel (loc.tet is the tet to keep for the next frame).
+vec3 tetraprobeIrradianceLocated(TetraprobeLocation loc, vec3 localPos, vec3 normal) {
   if (loc.tet < 0) return vec3(0.0);
   vec4 w = loc.weights;
   vec3 c[9];

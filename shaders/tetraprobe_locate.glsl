@@ -118,14 +118,18 @@ bool tetraprobeWalk(vec3 x, int cur, int maxSteps, out TetraprobeLocation loc, o
   return false;
 }
 
-TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
+// tetraprobeLocate with the hint's walk bounded by hintSteps (> 0) instead of TETRAPROBE_MAX_HINT_STEPS: for
+// hints that are usually right or far off, such as last frame's tet of a pixel (a disoccluded pixel's hint
+// belongs to another surface; a short budget gives it up quickly). The answer does not depend on the budget
+// beyond the choice between two tets holding a point on their shared face.
+TetraprobeLocation tetraprobeLocateWithin(vec3 localPos, int hint, int hintSteps) {
   if (tetraprobeTetCount <= 0) return TetraprobeLocation(-1, vec4(0.0), false, -1);
   vec3 x = tetraprobeSanitize(localPos);
   TetraprobeLocation loc;
   int exitFace = -1;
   // A hint gets a short budget, then the start grid the full one, then the scan.
-  if (hint >= 0 && hint < tetraprobeTetCount &&
-      tetraprobeWalk(x, hint, TETRAPROBE_MAX_HINT_STEPS, loc, exitFace) && exitFace < 0)
+  if (hint >= 0 && hint < tetraprobeTetCount && tetraprobeWalk(x, hint, hintSteps, loc, exitFace) &&
+      exitFace < 0)
     return loc;
   // The start brick names the start (the coarse start grid where the cell is absent).
   int start = tetraprobeUseCellGrid ? tetraprobeCellStartTet(x) : -1;
@@ -145,6 +149,10 @@ TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
   int cell = tetraprobeFindOuterCell(loc.tet, exitFace);
   if (cell >= 0) tetraprobeOuterLocate(x, cell, loc);
   return loc;
+}
+
+TetraprobeLocation tetraprobeLocate(vec3 localPos, int hint) {
+  return tetraprobeLocateWithin(localPos, hint, TETRAPROBE_MAX_HINT_STEPS);
 }
 
 #endif  // TETRAPROBE_LOCATE_GLSL

@@ -29,6 +29,7 @@
 #include "lighting_grid_texture.comp.h"
 #include "lighting_half.comp.h"
 #include "lighting_nearest.comp.h"
+#include "lighting_temporal.comp.h"
 #include "lighting_upsample.comp.h"
 #include "pipelines.h"
 #include "shadow_lights.h"
@@ -47,8 +48,8 @@ using render_detail::Vertex;
 using render_detail::vkCheck;
 using render_detail::VulkanContext;
 
-constexpr int kImageCount = 4;           // read back: color, position, normal, albedo
-constexpr uint32_t kMaxTimestamps = 64;  // two per pass
+constexpr int kImageCount = 4;            // read back: color, position, normal, albedo
+constexpr uint32_t kMaxTimestamps = 128;  // two per pass
 
 // Push constants of every compute pass (lighting.comp reads the first 12 bytes).
 struct ComputePush {
@@ -57,8 +58,11 @@ struct ComputePush {
   int32_t lightCount;   // direct.comp
   float eye[4];         // debug views: camera position (local frame), w = radians per pixel
   float shadowInfo[4];  // direct.comp: texels per shadow-map side, the sun box's half-width (metres)
+  int32_t parity;       // lighting_temporal.comp: the half of the pixel tets holding last frame's
+  int32_t unused[3];
+  glm::mat4 previousViewProj;  // lighting_temporal.comp: last frame's local frame -> clip space
 };
-static_assert(sizeof(ComputePush) == 48, "the compute shaders' push constant block");
+static_assert(sizeof(ComputePush) == 128, "the compute shaders' push constant block (128: Vulkan's minimum)");
 
 struct DotsPush {
   glm::mat4 viewProj;
@@ -275,6 +279,11 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
                  options.benchAmbient || options.benchGrid))
     throw std::runtime_error("render: shader variants and bench passes need a level");
   if (options.benchVariants.size() > 16) throw std::runtime_error("render: at most 16 bench variants");
+  if (options.temporalFrames != 0 &&
+      (options.temporalFrames < 2 || options.temporalFrames > 32 || !level ||
+       !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect)))
+    throw std::runtime_error(
+        "render: the temporal start needs 2..32 frames, a level and mode irradiance or indirect");
   if (options.halfResolution &&
       (!level || !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect)))
     throw std::runtime_error(
@@ -337,9 +346,23 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       ctx.createImage(width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                       VK_IMAGE_ASPECT_DEPTH_BIT, cleanup);
   const GpuImage* readImages[kImageCount] = {&color, &gPosition, &gNormal, &gAlbedo};
+  const VkDeviceSize imageBytes = VkDeviceSize(width) * height * 4 * sizeof(float);
   // The half-resolution lookup (tetraprobe_upsample.glsl): pass 1's E at ceil(W/2) x ceil(H/2), pass 2's image.
   const bool half = options.halfResolution;
   const uint32_t halfW = (width + 1) / 2, halfH = (height + 1) / 2;
+  // The temporal start (lighting_temporal.comp): its output and two frames of tets a pixel.
+  const bool temporal = options.temporalFrames > 0;
+  GpuImage temporalImage;
+  GpuBuffer pixelTets, temporalReadback;
+  if (temporal) {
+    temporalImage =
+        ctx.createImage(width, height, kGbufferFormat,
+                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, colorAspect, cleanup);
+    pixelTets = ctx.createBuffer(2 * VkDeviceSize(width) * height * sizeof(int32_t),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, cleanup);
+    temporalReadback = ctx.createBuffer(imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hostMem, cleanup);
+  }
   GpuImage halfE, upsampled;
   GpuBuffer upsampledReadback,
       edgePixels;  // edgePixels: lighting_upsample.comp's list for lighting_edges.comp
@@ -354,7 +377,6 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
         ctx.createImage(width, height, kGbufferFormat,
                         VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, colorAspect, cleanup);
   }
-  const VkDeviceSize imageBytes = VkDeviceSize(width) * height * 4 * sizeof(float);
   GpuBuffer readback[kImageCount];
   for (auto& b : readback)
     b = ctx.createBuffer(imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hostMem, cleanup);
@@ -432,12 +454,14 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   VkDescriptorSetLayoutBinding levelBindings[kGpuBindingCount];
   levelDescriptorBindings(VK_SHADER_STAGE_COMPUTE_BIT, 0, levelBindings);
   const uint32_t levelBindingCount = level ? uint32_t(kGpuBindingCount) : 1u;  // the grid: binding 0 only
-  // 5, 6, 7: the half-resolution lookup's two images and its list of pixels looked up at full resolution.
-  VkDescriptorSetLayoutBinding imageBindings[8];
-  const uint32_t imageBindingCount = half ? 8u : 5u;
-  for (uint32_t i = 0; i < imageBindingCount; ++i)
-    imageBindings[i] = {i, i == 7 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1,
-                        VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  // 5, 6, 7: the half-resolution lookup's two images and its list of pixels looked up at full resolution;
+  // 8, 9: the temporal start's image and its two frames of pixel tets.
+  std::vector<VkDescriptorSetLayoutBinding> imageBindings;
+  for (uint32_t i = 0; i < 10; ++i)
+    if (i < 5 || (half && i < 8) || (temporal && i >= 8))
+      imageBindings.push_back(
+          {i, i == 7 || i == 9 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1,
+           VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
   const VkDescriptorSetLayoutBinding directBindings[3] = {
       {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
@@ -449,7 +473,7 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
   const VkDescriptorSetLayout setLayouts[4] = {
       render_detail::createSetLayout(device, levelBindings, levelBindingCount, cleanup),
-      render_detail::createSetLayout(device, imageBindings, imageBindingCount, cleanup),
+      render_detail::createSetLayout(device, imageBindings.data(), uint32_t(imageBindings.size()), cleanup),
       render_detail::createSetLayout(device, directBindings, full ? 3u : 0u, cleanup),
       render_detail::createSetLayout(device, gridBindings, options.benchGrid ? 2u : 0u, cleanup)};
   const VkPipelineLayout computeLayout = render_detail::createPipelineLayout(
@@ -494,6 +518,9 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     edgesPipeline = lookupCode(variant, kSpirv_lighting_edges_comp, sizeof(kSpirv_lighting_edges_comp));
     upsampledReadback = ctx.createBuffer(imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hostMem, cleanup);
   }
+  const VkPipeline temporalPipeline =
+      temporal ? lookupCode(variant, kSpirv_lighting_temporal_comp, sizeof(kSpirv_lighting_temporal_comp))
+               : VK_NULL_HANDLE;
   if (full) directPipeline = compute(kSpirv_direct_comp, sizeof(kSpirv_direct_comp));
   if (mode == RenderMode::kProbes)
     debugPipeline = compute(kSpirv_debug_surface_comp, sizeof(kSpirv_debug_surface_comp));
@@ -538,8 +565,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   VkDescriptorPool descriptorPool;
   {
     const VkDescriptorPoolSize sizes[3] = {
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 5},
-        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 7},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, levelBindingCount + 6},
+        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 8},
         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1 + render_detail::kGridTextureCount}};
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     info.maxSets = 5;
@@ -579,22 +606,26 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   else
     writeBuffer(sets[0], 0, gridBuffer.buffer);
   {
-    const GpuImage* bound[7] = {&gPosition, &gNormal, &gAlbedo, &color, &gEmission, &halfE, &upsampled};
-    VkDescriptorImageInfo infos[7];
-    VkWriteDescriptorSet writes[7];
-    const uint32_t imageCount = std::min(imageBindingCount, 7u);  // binding 7 is a buffer
-    for (uint32_t i = 0; i < imageCount; ++i) {
-      infos[i] = {VK_NULL_HANDLE, bound[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-      writes[i] = VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-      writes[i].dstSet = sets[1];
-      writes[i].dstBinding = i;
-      writes[i].descriptorCount = 1;
-      writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-      writes[i].pImageInfo = &infos[i];
+    const GpuImage* bound[9] = {&gPosition, &gNormal,   &gAlbedo, &color,        &gEmission,
+                                &halfE,     &upsampled, nullptr,  &temporalImage};
+    VkDescriptorImageInfo infos[9];
+    VkWriteDescriptorSet writes[9];
+    uint32_t count = 0;
+    for (uint32_t i = 0; i < 9; ++i) {
+      if (!bound[i] || (i >= 5 && i < 8 && !half) || (i == 8 && !temporal)) continue;
+      infos[count] = {VK_NULL_HANDLE, bound[i]->view, VK_IMAGE_LAYOUT_GENERAL};
+      writes[count] = VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[count].dstSet = sets[1];
+      writes[count].dstBinding = i;
+      writes[count].descriptorCount = 1;
+      writes[count].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+      writes[count].pImageInfo = &infos[count];
+      ++count;
     }
-    vkUpdateDescriptorSets(device, imageCount, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, count, writes, 0, nullptr);
   }
   if (half) writeBuffer(sets[1], 7, edgePixels.buffer);
+  if (temporal) writeBuffer(sets[1], 9, pixelTets.buffer);
   if (full) {
     writeBuffer(sets[2], 0, lightBuffer.buffer);
     writeBuffer(sets[2], 1, matrixBuffer.buffer);
@@ -660,20 +691,8 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     }
     clock.end("shadow_maps");
   }
-  cmd = clock.begin();
-  if (full && shadowFramebuffers
-                  .empty()) {  // the stand-in layer, never read (no lights), still needs its sampled layout
-    VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    b.newLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
-    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.image = shadowImage.image;
-    b.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0,
-                         nullptr, 0, nullptr, 1, &b);
-  }
-  {
+  // The G-buffer at one camera, then every compute output image to the general layout.
+  auto recordGbuffer = [&](const glm::mat4& vp) {
     VkClearValue clears[5] = {};
     clears[4].depthStencil = {1.0f, 0};
     VkRenderPassBeginInfo info{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -687,20 +706,23 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
       vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, gbufferPipeline);
       const VkDeviceSize offset = 0;
       vkCmdBindVertexBuffers(cmd, 0, 1, &vertices.buffer, &offset);
-      vkCmdPushConstants(cmd, gbufferLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(glm::mat4), &viewProj);
+      vkCmdPushConstants(cmd, gbufferLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(glm::mat4), &vp);
       vkCmdDraw(cmd, uint32_t(soup.size()), 1, 0, 0);
     }
     vkCmdEndRenderPass(cmd);
-  }
-  imageBarrier(cmd, color.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
-               VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
-               VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-  if (half)
-    for (VkImage image : {halfE.image, upsampled.image})
-      imageBarrier(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
+    imageBarrier(cmd, color.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
+                 VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+    if (half)
+      for (VkImage image : {halfE.image, upsampled.image})
+        imageBarrier(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
+                     VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+    if (temporal)
+      imageBarrier(cmd, temporalImage.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, 0,
                    VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-  clock.end("gbuffer");
+  };
   ComputePush push{};
   push.size[0] = int32_t(width);
   push.size[1] = int32_t(height);
@@ -730,6 +752,54 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     clock.end(pass.c_str());
   };
   const uint32_t groupsX = (width + 7) / 8, groupsY = (height + 7) / 8;
+  // The temporal start's camera path: temporalFrames - 1 frames before the view, each temporalStep behind
+  // the next; in each, the G-buffer, the cold lookup and the temporal one (reading the tets the frame before
+  // wrote). The view's own frame below is the path's last.
+  std::vector<glm::mat4> pathViewProj;
+  if (temporal) {
+    for (int f = 0; f < options.temporalFrames; ++f) {
+      RenderView v = view;
+      const glm::vec3 back = float(options.temporalFrames - 1 - f) * options.temporalStep;
+      v.eye -= back;
+      v.target -= back;
+      pathViewProj.push_back(viewProjection(v, origin, lo, hi));
+    }
+    pathViewProj.back() = viewProj;
+  }
+  auto temporalPush = [&](int f) {
+    ComputePush p = push;
+    p.parity = f % 2;
+    p.previousViewProj = pathViewProj[size_t(std::max(f - 1, 0))];
+    return p;
+  };
+  for (int f = 0; f + 1 < options.temporalFrames; ++f) {
+    cmd = clock.begin();
+    if (f == 0) {  // no tets from before the path: every hint -1
+      vkCmdFillBuffer(cmd, pixelTets.buffer, 0, VK_WHOLE_SIZE, 0xffffffffu);
+      memoryBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                    VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    }
+    recordGbuffer(pathViewProj[size_t(f)]);
+    clock.end("path_gbuffer");
+    dispatch(lightingPipeline, "lookup_cold", push, groupsX, groupsY);
+    dispatch(temporalPipeline, f == 0 ? "lookup_temporal_first" : "lookup_temporal", temporalPush(f), groupsX,
+             groupsY);
+  }
+  cmd = clock.begin();
+  if (full && shadowFramebuffers
+                  .empty()) {  // the stand-in layer, never read (no lights), still needs its sampled layout
+    VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    b.newLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = shadowImage.image;
+    b.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0,
+                         nullptr, 0, nullptr, 1, &b);
+  }
+  recordGbuffer(viewProj);
+  clock.end("gbuffer");
   for (const auto& [name, pipeline] : benchPipelines) dispatch(pipeline, name, push, groupsX, groupsY);
   if (half) {
     dispatch(halfPipeline, "lookup_half", push, (halfW + 7) / 8, (halfH + 7) / 8);
@@ -764,6 +834,9 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     warmup.size[0] = warmup.size[1] = 1;
     dispatch(lightingPipeline, "lighting_warmup", warmup, 1, 1);
     dispatch(lightingPipeline, "lighting", push, groupsX, groupsY);
+    if (temporal)
+      dispatch(temporalPipeline, "lookup_temporal", temporalPush(options.temporalFrames - 1), groupsX,
+               groupsY);
   }
   if (directPipeline != VK_NULL_HANDLE) dispatch(directPipeline, "direct", push, groupsX, groupsY);
   if (debugPipeline != VK_NULL_HANDLE)
@@ -812,6 +885,9 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
     if (half && i == 0)
       vkCmdCopyImageToBuffer(copyCmd, upsampled.image, VK_IMAGE_LAYOUT_GENERAL, upsampledReadback.buffer, 1,
                              &region);
+    if (temporal && i == 0)
+      vkCmdCopyImageToBuffer(copyCmd, temporalImage.image, VK_IMAGE_LAYOUT_GENERAL, temporalReadback.buffer,
+                             1, &region);
   }
   memoryBarrier(copyCmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                 VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_HOST_READ_BIT);
@@ -841,11 +917,14 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   submitAndWait(ctx, copyCmd, fence);
 
   RenderResult result;
-  Image* outs[kImageCount + 1] = {&result.color, &result.position, &result.normal, &result.albedo,
-                                  &result.halfResolution};
-  for (int i = 0; i < kImageCount + (half ? 1 : 0); ++i) {
+  Image* outs[kImageCount + 2] = {&result.color,  &result.position,       &result.normal,
+                                  &result.albedo, &result.halfResolution, &result.temporal};
+  const GpuBuffer* sources[kImageCount + 2] = {&readback[0], &readback[1],       &readback[2],
+                                               &readback[3], &upsampledReadback, &temporalReadback};
+  for (int i = 0; i < kImageCount + 2; ++i) {
+    if ((i == kImageCount && !half) || (i == kImageCount + 1 && !temporal)) continue;
     Image& img = *outs[i];
-    const GpuBuffer& source = i < kImageCount ? readback[i] : upsampledReadback;
+    const GpuBuffer& source = *sources[i];
     img.width = view.width;
     img.height = view.height;
     img.rgba.resize(size_t(width) * height * 4);

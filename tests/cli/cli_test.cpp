@@ -1062,6 +1062,12 @@ TEST_F(Cli, BenchRenderPrintsLookupAmbientAndGridTimes) {
       << "a block's representative: 1 pixel in 4 or more";
   EXPECT_GE(half.at("error_vs_full").at("mean_rel").get<double>(), 0.0);
   EXPECT_LT(half.at("error_vs_full").at("mean_rel").get<double>(), 0.05);
+  // The temporal start over the default path: the cold lookup's answer, most pixels' last tets still right.
+  const auto& temporal = j.at("temporal");
+  EXPECT_EQ(temporal.at("frames").get<int>(), 4);
+  EXPECT_LE(temporal.at("max_rel_difference_to_cold").get<double>(), 1e-4);
+  EXPECT_GT(temporal.at("pixels_held_by_previous_tet").get<double>(), 0.5);
+  EXPECT_GT(temporal.at("temporal_ms").get<double>(), 0.0);
 
   const CliRun inspect = run("inspect " + level + " --json");
   ASSERT_EQ(inspect.code, 0) << inspect.err;

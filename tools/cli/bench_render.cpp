@@ -4,11 +4,14 @@
 // read from 3D textures with hardware filtering, of the tet level's bytes (what an engine's irradiance volume
 // costs). Times are GPU timestamps around each pass, the median of --frames frames after 2 warm-up frames.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "args.h"
 #include "commands.h"
@@ -52,6 +55,29 @@ double passMs(const RenderResult& r, const std::string& name) {
   return 0.0;
 }
 
+// The median over every pass of the render named one of `names` (a path repeats them; 0 when none).
+double medianMs(const RenderResult& r, std::initializer_list<const char*> names) {
+  std::vector<double> ms;
+  for (const PassTiming& p : r.timings.passes)
+    for (const char* n : names)
+      if (p.name == n) ms.push_back(p.ms);
+  if (ms.empty()) return 0.0;
+  std::sort(ms.begin(), ms.end());
+  return ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+}
+
+// The largest relative difference, per channel, between two renders' geometry pixels (floor 1e-6).
+double maxRelativeDifference(const Image& a, const Image& b) {
+  double worst = 0.0;
+  for (size_t i = 0; i + 3 < a.rgba.size() && i + 3 < b.rgba.size(); i += 4) {
+    if (a.rgba[i + 3] == 0.0f) continue;
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, std::abs(double(a.rgba[i + c]) - b.rgba[i + c]) /
+                                  std::max(std::abs(double(a.rgba[i + c])), 1e-6));
+  }
+  return worst;
+}
+
 }  // namespace
 
 int benchRender(int argc, char** argv) {
@@ -78,6 +104,12 @@ int benchRender(int argc, char** argv) {
                         "more variants to time, named as printed (e.g. l2+outer+cells), even ones that "
                         "leave out what the level uses (their pixels are then wrong): to profile the lookup",
                         ""},
+                       {"--temporal-frames", "", "N",
+                        "frames of the camera path for the temporal start (the walk from last frame's tet "
+                        "of the pixel, reprojected), ending at the view; 0 = off",
+                        "4"},
+                       {"--temporal-step", "", "M",
+                        "metres the camera moves a frame along the path, sideways (to its right)", "0.03"},
                        {"--json", "", "", "print the figures as one JSON object", ""}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
@@ -116,6 +148,11 @@ int benchRender(int argc, char** argv) {
   }
   options.benchAmbient = true;
   options.halfResolution = true;
+  options.temporalFrames = args.integer("--temporal-frames");
+  if (options.temporalFrames != 0 && (options.temporalFrames < 2 || options.temporalFrames > 32))
+    throw UsageError("--temporal-frames must be 0 or in 2..32");
+  const double temporalStep = args.number("--temporal-step");
+  if (!(temporalStep >= 0.0 && temporalStep <= 10.0)) throw UsageError("--temporal-step must be in 0..10 m");
 
   const uint64_t tetBytes = totalBytes(tetLookupBytes(query, !level.occlusion.empty()));
   glm::vec3 lo, hi;
@@ -129,6 +166,10 @@ int benchRender(int argc, char** argv) {
   grid.sh = gridSh.data();
   options.benchGrid = &grid;
 
+  if (options.temporalFrames > 0) {  // sideways: the camera's right, eye and target together
+    const glm::vec3 forward = glm::normalize(view.target - view.eye);
+    options.temporalStep = float(temporalStep) * glm::normalize(glm::cross(forward, view.up));
+  }
   const RenderResult r = renderLevel(toRenderMesh(scene), level, query, view, options);
   if (r.timings.passes.empty()) throw std::runtime_error("bench render: the Vulkan queue has no timestamps");
 
@@ -139,6 +180,33 @@ int benchRender(int argc, char** argv) {
   const double ambientMs = passMs(r, "ambient"), gridMs = passMs(r, "grid_texture");
   const double ratio = gridMs > 0.0 ? chosenMs / gridMs : 0.0;
   const bool met = gridMs > 0.0 && ratio <= kLookupGoalRatio;
+  nlohmann::json temporalJson = nullptr;
+  double coldMs = 0.0, warmMs = 0.0, temporalDiff = 0.0, heldShare = 0.0;
+  if (options.temporalFrames > 0) {
+    coldMs = medianMs(r, {"lookup_cold", "lighting"});
+    warmMs = medianMs(r, {"lookup_temporal"});
+    temporalDiff = maxRelativeDifference(r.color, r.temporal);
+    size_t pixels = 0, kept = 0;
+    for (size_t i = 3; i < r.temporal.rgba.size(); i += 4) {
+      pixels += r.temporal.rgba[i] != 0.0f;
+      kept += r.temporal.rgba[i] == 2.0f;
+    }
+    heldShare = pixels ? double(kept) / double(pixels) : 0.0;
+    temporalJson = {
+        {"frames", options.temporalFrames},
+        {"step_m", temporalStep},
+        {"cold_ms", coldMs},
+        {"temporal_ms", warmMs},
+        {"ratio_to_cold", coldMs > 0.0 ? warmMs / coldMs : 0.0},
+        {"ratio_to_grid", gridMs > 0.0 ? warmMs / gridMs : 0.0},
+        {"max_rel_difference_to_cold", temporalDiff},
+        {"pixels_held_by_previous_tet", heldShare},
+        {"definition",
+         "the level's variant on each frame of a sideways camera path ending at the view: cold = "
+         "median of the lookup from the start bricks over the path's frames, temporal = median of "
+         "the lookup started from the previous frame's tet of the reprojected pixel (the path's "
+         "first frame, which has none, left out)"}};
+  }
   size_t geometry = 0;
   for (size_t i = 0; i < r.position.rgba.size(); i += 4) geometry += r.position.rgba[i + 3] != 0.0f;
 
@@ -169,6 +237,7 @@ int benchRender(int argc, char** argv) {
         {"goal_ratio", kLookupGoalRatio},
         {"goal_met", met},
         {"half_resolution", halfResolutionJson(r, chosenMs, gridMs)},
+        {"temporal", temporalJson},
         {"ms_definition",
          "per pass, the median over the timed frames of the difference between Vulkan timestamps before "
          "and after the pass, each pass in a command buffer of its own on the same G-buffer"}};
@@ -191,6 +260,13 @@ int benchRender(int argc, char** argv) {
   std::printf("  tet lookup bytes %.2f MB; lookup / grid = %.2f (goal <= %.1f: %s)\n", double(tetBytes) / 1e6,
               ratio, kLookupGoalRatio, met ? "met" : "NOT met");
   printHalfResolution(r, chosenMs, gridMs);
+  if (options.temporalFrames > 0)
+    std::printf(
+        "  temporal start (engine option)                %9.3f ms  (cold %.3f on the same path of %d frames, "
+        "%.3g m a frame: %.2f x cold, %.2f x grid; %.1f %% of pixels held by last frame's tet; largest "
+        "difference to cold %.2g)\n",
+        warmMs, coldMs, options.temporalFrames, temporalStep, coldMs > 0.0 ? warmMs / coldMs : 0.0,
+        gridMs > 0.0 ? warmMs / gridMs : 0.0, 100 * heldShare, temporalDiff);
   return 0;
 }
 

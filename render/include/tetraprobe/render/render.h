@@ -177,6 +177,15 @@ struct RenderOptions {
   // bench passes; PassTiming "lookup_half" and "upsample"; its image in RenderResult::halfResolution. Levels,
   // modes kIrradiance and kIndirect only.
   bool halfResolution = false;
+  // The temporal start as well (shaders/lighting_temporal.comp: the walk starts from last frame's tet of the
+  // pixel, reprojected): 0 = off, else 2..32 frames of a straight camera path that ends at the view, the eye
+  // and target moving temporalStep (world metres) a frame. Each frame before the view's renders its G-buffer
+  // (PassTiming "path_gbuffer"), the cold lookup ("lookup_cold") and the temporal one ("lookup_temporal";
+  // the path's first, which has no tets from before, "lookup_temporal_first"); the view's own frame adds a
+  // "lookup_temporal" after "lighting", its image in RenderResult::temporal. Levels, modes kIrradiance and
+  // kIndirect only.
+  int temporalFrames = 0;
+  glm::vec3 temporalStep{0.0f};
 };
 
 struct RenderResult {
@@ -187,6 +196,10 @@ struct RenderResult {
   // With RenderOptions::halfResolution: the upsampled half-resolution lookup, rgb as `color`, a = how each
   // pixel was answered: 0 background, 1 interpolated, 2 its block's own lookup, 3 looked up at full resolution.
   Image halfResolution;
+  // With RenderOptions::temporalFrames: the view's lookup started from the path's previous frame's tets (rgb
+  // as `color`, which it equals up to rounding; a = 2 where the previous frame's tet of the reprojected pixel
+  // holds the point, 1 on other geometry, 0 on background).
+  Image temporal;
   RenderTimings timings;
   ShaderVariant variant;   // the lighting pass's (levels only)
   std::string deviceName;  // the Vulkan device's (VkPhysicalDeviceProperties::deviceName)
