@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -63,6 +64,8 @@ struct ComputePush {
   glm::mat4 previousViewProj;  // lighting_temporal.comp: last frame's local frame -> clip space
 };
 static_assert(sizeof(ComputePush) == 128, "the compute shaders' push constant block (128: Vulkan's minimum)");
+static_assert(offsetof(ComputePush, parity) == 48 && offsetof(ComputePush, previousViewProj) == 64,
+              "lighting_temporal.comp's push block: parity at byte 48, the matrix at layout(offset = 64)");
 
 struct DotsPush {
   glm::mat4 viewProj;
