@@ -47,7 +47,7 @@ ErrorEstimate scoreRefinePoints(const Level& level, std::vector<RefinePoint>& po
   ErrorEstimate est;
   est.points = points.size();
   if (points.empty() || level.tets.empty()) return est;
-  const ProbeQuery query(level);
+  const ProbeQuery query(level, kStoredCellGridOnly);  // a level being built may have no grid yet
   double sum = 0.0;
   size_t gross = 0;
   for (RefinePoint& p : points) {

@@ -100,7 +100,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
   // The lookup's coefficients at every point (parallel, written by index).
   std::vector<Row> rows(points.size());
   {
-    const ProbeQuery query(level);
+    const ProbeQuery query(level, kStoredCellGridOnly);  // a level being built may have no grid yet
     const LevelOcclusion* occlusion = query.occlusion();
     parallelFor(
         points.size(), threads,
@@ -288,8 +288,8 @@ ShFitScore shFitScore(const Level& level, const std::vector<ShFitPoint>& points)
   ShFitScore score;
   if (points.empty() || level.tets.empty()) return score;
   const double f = levelFloor(points);
-  constexpr double kGrossFloor = 0.01;  // W/m^2, as eval
-  const ProbeQuery query(level);
+  constexpr double kGrossFloor = 0.01;                 // W/m^2, as eval
+  const ProbeQuery query(level, kStoredCellGridOnly);  // a level being built may have no grid yet
   double sum = 0.0;
   size_t gross = 0;
   for (const ShFitPoint& p : points) {

@@ -149,7 +149,7 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
   const std::vector<SurfacePoint> points = sampleSurfacePoints(tracer, int(wanted), options.seed);
   out.pointsChecked = points.size();
 
-  const ProbeQuery query(level);
+  const ProbeQuery query(level, kStoredCellGridOnly);  // a level being built may have no grid yet
   std::optional<ProbesInFront> proposals;
   if (options.propose) proposals.emplace(tracer, level, options.spacing);
   FlushDenormalsScope ftz;

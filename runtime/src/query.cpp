@@ -458,7 +458,8 @@ StartGrid buildStartGrid(const Level& level) {
 ProbeQuery::ProbeQuery(const Level& level, float cellSize, int threads)
     : level_(level), grid_(buildStartGrid(level)) {
   if (level.outerCells.empty() && !level.tets.empty()) ownCells_ = buildOuterCells(level.probes, level.tets);
-  if (level.cellGrid.slots.empty() || level.cellGrid.cellSize != cellSize)
+  if (cellSize != kStoredCellGridOnly &&
+      (level.cellGrid.slots.empty() || level.cellGrid.cellSize != cellSize))
     ownGrid_ = buildCellGrid(level.probes, level.tets, cellSize, threads);
 }
 

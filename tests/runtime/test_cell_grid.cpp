@@ -307,6 +307,49 @@ TEST(CellGrid, AnswerDoesNotDependOnTheSplits) {
   }
 }
 
+// kStoredCellGridOnly (the bake's rounds): no grid is built for a level without one, and the walks from the
+// coarse start grid give the grid's answers: the same tet and bit-identical weights for points inside a tet,
+// weights within 1e-6 on shared faces, edges and vertices (where either tet holding the point may be named);
+// a level that stores a grid keeps using it.
+TEST(CellGrid, WalkWithoutAGridGivesTheGridsAnswers) {
+  for (int which = 0; which < 3; ++which) {
+    Level level = which == 0 ? ballLevel() : which == 1 ? boxLevel() : latticeLevel();
+    level.cellGrid = CellGrid{};
+    const ProbeQuery walked(level, kStoredCellGridOnly), gridded(level, 16.0f, 2);
+    EXPECT_TRUE(walked.cellGrid().slots.empty()) << "no grid is built";
+    ASSERT_FALSE(gridded.cellGrid().slots.empty());
+    std::mt19937_64 rng(91 + uint64_t(which));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::uniform_int_distribution<size_t> anyTet(0, level.tets.size() - 1);
+    double worst = 0.0;
+    size_t interiorMismatch = 0, interior = 0;
+    for (size_t k = 0; k < 20'000; ++k) {
+      const Tet& t = level.tets[anyTet(rng)];
+      glm::dvec3 p[4];
+      for (int i = 0; i < 4; ++i) p[i] = glm::dvec3(level.probes[size_t(t.v[i])]);
+      double b[4] = {u(rng) + 0.05, u(rng) + 0.05, u(rng) + 0.05, u(rng) + 0.05};
+      const double sum = b[0] + b[1] + b[2] + b[3];
+      const bool onBoundary = k % 2 == 0;
+      if (onBoundary) b[k % 4] = 0.0;  // on a face of t
+      glm::dvec3 x(0.0);
+      double bs = 0.0;
+      for (int i = 0; i < 4; ++i) bs += b[i];
+      for (int i = 0; i < 4; ++i) x += b[i] / (onBoundary ? bs : sum) * p[i];
+      const Location lw = walked.locate(level.origin + x), lg = gridded.locate(level.origin + x);
+      worst = std::max(worst, weightDifference(level, lw, lg));
+      if (!onBoundary) {
+        ++interior;
+        interiorMismatch += lw.tet != lg.tet || lw.weights != lg.weights;
+      }
+    }
+    EXPECT_LE(worst, 1e-6) << "level " << which;
+    EXPECT_EQ(interiorMismatch, 0u) << "level " << which << ": of " << interior << " interior points";
+  }
+  Level stored = boxLevel();
+  stored.cellGrid = buildCellGrid(stored.probes, stored.tets, 4.0f, 1);
+  EXPECT_EQ(ProbeQuery(stored, kStoredCellGridOnly).cellGrid().nodes.size(), stored.cellGrid.nodes.size());
+}
+
 // The hash table keeps its stated bound, is at most half full, and every stored cell is found.
 TEST(CellGrid, HashProbeBoundHolds) {
   const Level level = boxLevel();

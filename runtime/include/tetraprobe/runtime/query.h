@@ -38,12 +38,19 @@ struct Location {
   int32_t outerCell = -1;   // outside the hull: the outer cell holding the point; -1 inside (or no cell)
 };
 
+// ProbeQuery's cellSize for "the level's stored cell grid if it has one, never build one": without a grid,
+// points are located by walks from the coarse start grid, which give the same answers (the walk decides
+// them; the grid only shortens it). For levels that change between queries, such as the bake's hole and
+// refinement rounds, where building a grid per round would cost more than the walks.
+inline constexpr float kStoredCellGridOnly = 0.0f;
+
 class ProbeQuery {
  public:
   // Keeps a reference to `level` (which must outlive the query) and builds its acceleration data: the start
   // grid, the outer cells when the level carries none, and the cell grid + BSP with cells of `cellSize`
   // metres unless the level stores one of that cell size (on up to `threads` threads, 0 = all cores; the
   // result does not depend on it; about 45 s for a million probes on two cores, hence stored at bake).
+  // cellSize kStoredCellGridOnly: the stored grid whatever its cell size, or none.
   explicit ProbeQuery(const Level& level, float cellSize = 16.0f, int threads = 0);
 
   // Locates a world-space point. `hint` is a tet to start from (for example the tet of the same object
