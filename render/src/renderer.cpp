@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -960,6 +960,12 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
 }
 
 }  // namespace
+
+double RenderTimings::passMs(const std::string& name) const {
+  for (const PassTiming& p : passes)
+    if (p.name == name) return p.ms;
+  return 0.0;
+}
 
 bool isDebugMode(RenderMode mode) {
   return mode == RenderMode::kProbes || mode == RenderMode::kTets || mode == RenderMode::kOcclusion;

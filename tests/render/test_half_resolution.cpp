@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "lookup_scene.h"
@@ -111,15 +112,12 @@ RenderMesh meshWithPosts() {
   return m;
 }
 
-RenderResult renderHalf(const Level& level, const ProbeQuery& query, RenderMode mode, int w, int h,
-                        bool& skipped) {
+// Renders `level` (with the half-resolution lookup) into `r`; false, with the reason in `skip`, without Vulkan.
+bool renderHalf(const Level& level, RenderMode mode, int w, int h, RenderResult& r, std::string& skip) {
+  const ProbeQuery query(level);
   RenderOptions options;
   options.halfResolution = true;
-  RenderResult r;
-  std::string skip;
-  skipped = !test::render(meshWithPosts(), level, query, makeView(mode, w, h), r, skip, options);
-  if (skipped) std::printf("skipped: %s\n", skip.c_str());
-  return r;
+  return test::render(meshWithPosts(), level, query, makeView(mode, w, h), r, skip, options);
 }
 
 // Every geometry pixel is answered one of the three ways, the blocks' representatives (and only they) by
@@ -129,10 +127,9 @@ TEST(HalfResolution, RepresentativesAndEdgePixelsAreTheFullLookup) {
   for (const bool occlusion : {false, true}) {
     Level level = makeLevel();
     if (occlusion) level.occlusion = syntheticOcclusion(level);
-    const ProbeQuery query(level);
-    bool skipped = false;
-    const RenderResult r = renderHalf(level, query, RenderMode::kIrradiance, 481, 271, skipped);
-    if (skipped) TETRAPROBE_SKIP_MISSING("no Vulkan device");
+    RenderResult r;
+    std::string skip;
+    if (!renderHalf(level, RenderMode::kIrradiance, 481, 271, r, skip)) TETRAPROBE_SKIP_MISSING(skip);
     const HalfFigures f = check(r);
     EXPECT_EQ(f.badCode, 0u);
     EXPECT_EQ(f.wrongRepresentative, 0u);
@@ -151,11 +148,9 @@ TEST(HalfResolution, RepresentativesAndEdgePixelsAreTheFullLookup) {
 // mean and p99 well under the bounds (printed); a sample taken from another surface (a missed depth or
 // normal test) would put whole edges tens of per cent off.
 TEST(HalfResolution, InterpolatedPixelsStayCloseToTheFullLookupOnSmoothLight) {
-  const Level level = makeLevel();
-  const ProbeQuery query(level);
-  bool skipped = false;
-  const RenderResult r = renderHalf(level, query, RenderMode::kIrradiance, 320, 180, skipped);
-  if (skipped) TETRAPROBE_SKIP_MISSING("no Vulkan device");
+  RenderResult r;
+  std::string skip;
+  if (!renderHalf(makeLevel(), RenderMode::kIrradiance, 320, 180, r, skip)) TETRAPROBE_SKIP_MISSING(skip);
   const HalfFigures f = check(r);
   EXPECT_GT(f.interpolated, f.geometry / 2);
   EXPECT_LT(f.meanRel, 0.01);
@@ -165,11 +160,9 @@ TEST(HalfResolution, InterpolatedPixelsStayCloseToTheFullLookupOnSmoothLight) {
 // Mode 1 (albedo * E / pi) multiplies each pixel's own albedo after the upsample: exact pixels equal the full
 // pass's radiance too.
 TEST(HalfResolution, IndirectModeAppliesEachPixelsAlbedo) {
-  const Level level = makeLevel();
-  const ProbeQuery query(level);
-  bool skipped = false;
-  const RenderResult r = renderHalf(level, query, RenderMode::kIndirect, 200, 120, skipped);
-  if (skipped) TETRAPROBE_SKIP_MISSING("no Vulkan device");
+  RenderResult r;
+  std::string skip;
+  if (!renderHalf(makeLevel(), RenderMode::kIndirect, 200, 120, r, skip)) TETRAPROBE_SKIP_MISSING(skip);
   const HalfFigures f = check(r);
   EXPECT_EQ(f.badCode, 0u);
   EXPECT_EQ(f.exactMismatch, 0u);

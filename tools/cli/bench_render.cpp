@@ -49,12 +49,6 @@ std::vector<ShRgb> gridFromLevel(const ProbeQuery& query, const GridLayout& layo
   return sh;
 }
 
-double passMs(const RenderResult& r, const std::string& name) {
-  for (const PassTiming& p : r.timings.passes)
-    if (p.name == name) return p.ms;
-  return 0.0;
-}
-
 // The median over every pass of the render named one of `names` (a path repeats them; 0 when none).
 double medianMs(const RenderResult& r, std::initializer_list<const char*> names) {
   std::vector<double> ms;
@@ -174,12 +168,14 @@ int benchRender(int argc, char** argv) {
   if (r.timings.passes.empty()) throw std::runtime_error("bench render: the Vulkan queue has no timestamps");
 
   nlohmann::json lookup = nlohmann::json::object();
-  const double chosenMs = passMs(r, "lookup:" + chosen.name());
+  const double chosenMs = r.timings.passMs("lookup:" + chosen.name());
   lookup["chosen"] = chosenMs;
-  for (const ShaderVariant& v : options.benchVariants) lookup[v.name()] = passMs(r, "lookup:" + v.name());
-  const double ambientMs = passMs(r, "ambient"), gridMs = passMs(r, "grid_texture");
+  for (const ShaderVariant& v : options.benchVariants)
+    lookup[v.name()] = r.timings.passMs("lookup:" + v.name());
+  const double ambientMs = r.timings.passMs("ambient"), gridMs = r.timings.passMs("grid_texture");
   const double ratio = gridMs > 0.0 ? chosenMs / gridMs : 0.0;
   const bool met = gridMs > 0.0 && ratio <= kLookupGoalRatio;
+  const HalfResolutionReport half = halfResolutionReport(r, chosenMs, gridMs);
   nlohmann::json temporalJson = nullptr;
   double coldMs = 0.0, warmMs = 0.0, temporalDiff = 0.0, heldShare = 0.0;
   if (options.temporalFrames > 0) {
@@ -236,7 +232,7 @@ int benchRender(int argc, char** argv) {
         {"ratio_lookup_to_grid", ratio},
         {"goal_ratio", kLookupGoalRatio},
         {"goal_met", met},
-        {"half_resolution", halfResolutionJson(r, chosenMs, gridMs)},
+        {"half_resolution", halfResolutionJson(half)},
         {"temporal", temporalJson},
         {"ms_definition",
          "per pass, the median over the timed frames of the difference between Vulkan timestamps before "
@@ -248,7 +244,7 @@ int benchRender(int argc, char** argv) {
               view.width, view.height, geometry, r.deviceName.c_str(), r.timings.timedFrames,
               r.timings.warmupFrames);
   for (const ShaderVariant& v : options.benchVariants)
-    std::printf("  lookup %-38s %9.3f ms%s\n", v.name().c_str(), passMs(r, "lookup:" + v.name()),
+    std::printf("  lookup %-38s %9.3f ms%s\n", v.name().c_str(), r.timings.passMs("lookup:" + v.name()),
                 v == chosen                      ? "  (the level's)"
                 : shaderVariantCovers(v, chosen) ? ""
                                                  : "  (does not cover the level: profiling only)");
@@ -259,7 +255,7 @@ int benchRender(int argc, char** argv) {
       double(r.gridTextureBytes) / 1e6);
   std::printf("  tet lookup bytes %.2f MB; lookup / grid = %.2f (goal <= %.1f: %s)\n", double(tetBytes) / 1e6,
               ratio, kLookupGoalRatio, met ? "met" : "NOT met");
-  printHalfResolution(r, chosenMs, gridMs);
+  printHalfResolution(half);
   if (options.temporalFrames > 0)
     std::printf(
         "  temporal start (engine option)                %9.3f ms  (cold %.3f on the same path of %d frames, "

@@ -519,8 +519,9 @@ int cmdEval(int argc, char** argv) {
         "tetraprobe eval: half-resolution lookup at 1280x720 (an engine option; full lighting pass %.1f "
         "ms):\n",
         r.timings.lightingMs);
-    printHalfResolution(r, r.timings.lightingMs, 0.0);
-    halfJson = halfResolutionJson(r, r.timings.lightingMs, 0.0);
+    const HalfResolutionReport report = halfResolutionReport(r, r.timings.lightingMs, 0.0);
+    printHalfResolution(report);
+    halfJson = halfResolutionJson(report);
     halfJson["full_ms"] = r.timings.lightingMs;
   }
 

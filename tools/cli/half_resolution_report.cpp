@@ -1,41 +1,31 @@
-// halfResolutionJson, printHalfResolution: the half-resolution lookup's figures for bench render and eval.
+// halfResolutionReport, halfResolutionJson, printHalfResolution: the half-resolution lookup's figures for
+// bench render and eval.
 #include "half_resolution_report.h"
 
 #include <cstdio>
 
-#include "tetraprobe/eval/half_resolution_error.h"
-
 namespace tetraprobe::cli {
 
-namespace {
-
-double passMs(const RenderResult& r, const char* name) {
-  for (const PassTiming& p : r.timings.passes)
-    if (p.name == name) return p.ms;
-  return 0.0;
+HalfResolutionReport halfResolutionReport(const RenderResult& r, double fullMs, double gridMs) {
+  HalfResolutionReport h;
+  h.halfMs = r.timings.passMs("lookup_half");
+  h.upsampleMs = r.timings.passMs("upsample");
+  h.edgesMs = r.timings.passMs("lookup_edges");
+  h.totalMs = h.halfMs + h.upsampleMs + h.edgesMs;
+  h.fullMs = fullMs;
+  h.gridMs = gridMs;
+  h.error = halfResolutionError(r.color, r.halfResolution);
+  return h;
 }
 
-struct HalfTimes {
-  double half, upsample, edges, total;
-};
-
-HalfTimes halfTimes(const RenderResult& r) {
-  HalfTimes t{passMs(r, "lookup_half"), passMs(r, "upsample"), passMs(r, "lookup_edges"), 0.0};
-  t.total = t.half + t.upsample + t.edges;
-  return t;
-}
-
-}  // namespace
-
-nlohmann::json halfResolutionJson(const RenderResult& r, double fullMs, double gridMs) {
-  const HalfTimes t = halfTimes(r);
-  const HalfResolutionError e = halfResolutionError(r.color, r.halfResolution);
+nlohmann::json halfResolutionJson(const HalfResolutionReport& h) {
+  const HalfResolutionError& e = h.error;
   nlohmann::json j = {
-      {"lookup_half_ms", t.half},
-      {"upsample_ms", t.upsample},
-      {"lookup_edges_ms", t.edges},
-      {"total_ms", t.total},
-      {"ratio_to_full", fullMs > 0.0 ? t.total / fullMs : 0.0},
+      {"lookup_half_ms", h.halfMs},
+      {"upsample_ms", h.upsampleMs},
+      {"lookup_edges_ms", h.edgesMs},
+      {"total_ms", h.totalMs},
+      {"ratio_to_full", h.fullMs > 0.0 ? h.totalMs / h.fullMs : 0.0},
       {"pixels_interpolated", e.interpolated},
       {"pixels_own_lookup", e.copied},
       {"pixels_full_lookup", e.fullLookup},
@@ -50,18 +40,17 @@ nlohmann::json halfResolutionJson(const RenderResult& r, double fullMs, double g
         {"definition",
          "per geometry pixel |Y(half) - Y(full)| / max(Y(full), floor), Y = Rec. 709 luminance, floor = "
          "max(5 % of the mean Y(full), 0.01)"}}}};
-  if (gridMs > 0.0) j["ratio_to_grid"] = t.total / gridMs;
+  if (h.gridMs > 0.0) j["ratio_to_grid"] = h.totalMs / h.gridMs;
   return j;
 }
 
-void printHalfResolution(const RenderResult& r, double fullMs, double gridMs) {
-  const HalfTimes t = halfTimes(r);
-  const HalfResolutionError e = halfResolutionError(r.color, r.halfResolution);
+void printHalfResolution(const HalfResolutionReport& h) {
+  const HalfResolutionError& e = h.error;
   std::printf(
       "  half resolution (engine option)               %9.3f ms  (lookup a 2x2 block %.3f + upsample %.3f + "
       "edge lookups %.3f; %.2f x full",
-      t.total, t.half, t.upsample, t.edges, fullMs > 0.0 ? t.total / fullMs : 0.0);
-  if (gridMs > 0.0) std::printf(", %.2f x grid", t.total / gridMs);
+      h.totalMs, h.halfMs, h.upsampleMs, h.edgesMs, h.fullMs > 0.0 ? h.totalMs / h.fullMs : 0.0);
+  if (h.gridMs > 0.0) std::printf(", %.2f x grid", h.totalMs / h.gridMs);
   std::printf(")\n");
   std::printf(
       "    pixels: %.1f %% interpolated, %.1f %% their block's lookup, %.2f %% looked up at full resolution; "

@@ -118,6 +118,9 @@ struct RenderTimings {
   // the queue has no timestamps.
   std::vector<PassTiming> passes;
   int warmupFrames = 0, timedFrames = 1;
+
+  // The first pass named `name` in `passes`; 0 when there is none.
+  double passMs(const std::string& name) const;
 };
 
 // A regular SH L2 grid for the lighting pass to read instead of a level (shaders/lighting_grid.comp): the
