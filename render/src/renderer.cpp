@@ -321,10 +321,16 @@ RenderResult renderImpl(const RenderMesh& mesh, const glm::dvec3& origin, const 
   GpuBuffer gridBuffer;
   if (level) {
     std::string uploadError;
-    if (uploadLevelBuffers(ctx.physicalDevice(), device, ctx.queue(), ctx.commandPool(), *level,
-                           query->startGrid(), query->outerCells(), query->cellGrid(), levelBuffers,
-                           &uploadError) != VK_SUCCESS)
-      throw std::runtime_error("render: level upload failed: " + uploadError);
+    if (options.levelBuffers && !options.variant)
+      throw std::runtime_error("render: packed level buffers need their shader variant");
+    const VkResult uploaded =
+        options.levelBuffers
+            ? uploadPackedLevelBuffers(ctx.physicalDevice(), device, ctx.queue(), ctx.commandPool(),
+                                       *options.levelBuffers, levelBuffers, &uploadError)
+            : uploadLevelBuffers(ctx.physicalDevice(), device, ctx.queue(), ctx.commandPool(), *level,
+                                 query->startGrid(), query->outerCells(), query->cellGrid(), levelBuffers,
+                                 &uploadError);
+    if (uploaded != VK_SUCCESS) throw std::runtime_error("render: level upload failed: " + uploadError);
     cleanup.push([device, &levelBuffers] { destroyLevelBuffers(device, levelBuffers); });
   } else {
     gridBuffer = ctx.createBuffer(grid->bytes.size(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hostMem, cleanup);

@@ -74,24 +74,12 @@ struct StreamingLevel::File {
   uint32_t content = 0, shOrder = 2;
 };
 
-// One loaded sector: its records with the file's (global) indices.
-struct StreamingLevel::Sector {
-  std::vector<uint32_t> tetIds, probeIds;  // increasing
-  std::vector<Tet> tets;                   // global probe and neighbour indices
-  std::vector<glm::vec3> positions;
-  std::vector<ShRgb> sh;
-  std::vector<TetOcclusion> occ;       // empty without occlusion
-  std::vector<OcclusionPlane> planes;  // the sector's tets' planes, in tet order
-  std::vector<uint8_t> blocks;         // their shadow-map blocks, in tet order
-  std::vector<BspNode> nodes;          // children >= 0 index `nodes`; leaves name global tets
-  int32_t root = kEmptyLeaf;
-  size_t bytes() const {
-    return (tetIds.size() + probeIds.size()) * 4 + tets.size() * sizeof(Tet) +
-           positions.size() * sizeof(glm::vec3) + sh.size() * sizeof(ShRgb) +
-           occ.size() * sizeof(TetOcclusion) + planes.size() * sizeof(OcclusionPlane) + blocks.size() +
-           nodes.size() * sizeof(BspNode);
-  }
-};
+size_t SectorRecords::bytes() const {
+  return (tetIds.size() + probeIds.size()) * 4 + tets.size() * sizeof(Tet) +
+         positions.size() * sizeof(glm::vec3) + sh.size() * sizeof(ShRgb) +
+         occ.size() * sizeof(TetOcclusion) + planes.size() * sizeof(OcclusionPlane) + blocks.size() +
+         nodes.size() * sizeof(BspNode);
+}
 
 StreamingLevel::StreamingLevel() = default;
 StreamingLevel::~StreamingLevel() = default;
@@ -205,6 +193,10 @@ SectorKey StreamingLevel::sectorOf(const glm::dvec3& world) const {
   return SectorKey{key[0], key[1], key[2]};
 }
 
+bool StreamingLevel::hasOcclusion() const {
+  return file_ && file_->records.occl != 0;
+}
+
 bool StreamingLevel::hasSector(const SectorKey& key) const {
   return std::binary_search(keys_.begin(), keys_.end(), key);
 }
@@ -212,6 +204,21 @@ bool StreamingLevel::hasSector(const SectorKey& key) const {
 LevelResult StreamingLevel::load(const SectorKey& key) {
   if (!file_) return fail(LevelStatus::kCannotOpen, "streaming level not open");
   if (isLoaded(key)) return {};
+  auto s = std::make_unique<Sector>();
+  if (LevelResult r = readSector(key, *s); !r) return r;
+  loaded_[key] = std::move(s);
+  if (std::string e = rebuild(); !e.empty()) {
+    loaded_.erase(key);
+    rebuild();  // the others, as they were
+    return fail(LevelStatus::kCorrupt, path_ + ": sector (" + std::to_string(key.x) + ", " +
+                                           std::to_string(key.y) + ", " + std::to_string(key.z) + "): " + e);
+  }
+  return {};
+}
+
+LevelResult StreamingLevel::readSector(const SectorKey& key, SectorRecords& out) {
+  out = SectorRecords{};
+  if (!file_) return fail(LevelStatus::kCannotOpen, "streaming level not open");
   const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
   const std::string where = path_ + ": sector (" + std::to_string(key.x) + ", " + std::to_string(key.y) +
                             ", " + std::to_string(key.z) + "): ";
@@ -220,13 +227,16 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
       index_.data() + runtime_detail::kStreamSectorBytes * size_t(it - keys_.begin()));
   File& f = *file_;
   const runtime_detail::StreamRecords& rec = f.records;
-  auto bad = [&](const std::string& why) { return fail(LevelStatus::kCorrupt, where + why); };
+  auto bad = [&](const std::string& why) {
+    out = SectorRecords{};
+    return fail(LevelStatus::kCorrupt, where + why);
+  };
   // The sector's bytes (its references and nodes from the index, its records from the level's sections),
   // checked by the sector's CRC before any is decoded.
   runtime_detail::SectorBytes b;
   if (std::string e = runtime_detail::readSectorBytes(f.in, rec, f.header, r, b); !e.empty()) return bad(e);
   if (b.crc != r.crc) return bad("checksum mismatch");
-  auto s = std::make_unique<Sector>();
+  SectorRecords* s = &out;
   s->tetIds = std::move(b.tetIds);
   s->probeIds = std::move(b.probeIds);
   // Nodes: children >= 0 are later nodes of this sector, leaves name tets of this sector.
@@ -289,12 +299,6 @@ LevelResult StreamingLevel::load(const SectorKey& key) {
       s->planes.push_back(pl);
     }
     s->blocks = std::move(b.blocks);
-  }
-  loaded_[key] = std::move(s);
-  if (std::string e = rebuild(); !e.empty()) {
-    loaded_.erase(key);
-    rebuild();  // the others, as they were
-    return bad(e);
   }
   return {};
 }

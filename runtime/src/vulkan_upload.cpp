@@ -386,6 +386,20 @@ VkResult cmdUploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device,
   PackedLevelBuffers packed;
   if (!packLevelBuffers(level, grid, outerCells, cellGrid, packed, error, maxWalkSteps))
     return VK_ERROR_INITIALIZATION_FAILED;
+  return cmdUploadPackedLevelBuffers(physicalDevice, device, cmd, packed, shaderStages, out, staging, error);
+}
+
+VkResult cmdUploadPackedLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkCommandBuffer cmd,
+                                     const PackedLevelBuffers& packed, VkPipelineStageFlags shaderStages,
+                                     VulkanLevelBuffers& out, VulkanStagingBuffer& staging,
+                                     std::string* error) {
+  out = VulkanLevelBuffers{};
+  staging = VulkanStagingBuffer{};
+  for (int i = 0; i < int(kGpuBindingCount); ++i)
+    if (packed.bytes[i].empty() || packed.bytes[i].size() % 64 != 0) {
+      if (error) *error = std::string(bindingName(i)) + " buffer: packed bytes not a positive multiple of 64";
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
 
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physicalDevice, &props);
@@ -454,15 +468,24 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, Vk
                             const std::vector<OuterCell>& outerCells, const CellGrid& cellGrid,
                             VulkanLevelBuffers& out, std::string* error, int32_t maxWalkSteps) {
   out = VulkanLevelBuffers{};
+  PackedLevelBuffers packed;
+  if (!packLevelBuffers(level, grid, outerCells, cellGrid, packed, error, maxWalkSteps))
+    return VK_ERROR_INITIALIZATION_FAILED;
+  return uploadPackedLevelBuffers(physicalDevice, device, queue, pool, packed, out, error);
+}
+
+VkResult uploadPackedLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkQueue queue,
+                                  VkCommandPool pool, const PackedLevelBuffers& packed,
+                                  VulkanLevelBuffers& out, std::string* error) {
+  out = VulkanLevelBuffers{};
   VulkanStagingBuffer staging;
   VkResult recorded = VK_SUCCESS;
   std::string what;
   const VkResult r = vulkan_detail::submitAndWait(
       device, queue, pool,
       [&](VkCommandBuffer cmd) {
-        recorded =
-            cmdUploadLevelBuffers(physicalDevice, device, cmd, level, grid, outerCells, cellGrid,
-                                  VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, out, staging, error, maxWalkSteps);
+        recorded = cmdUploadPackedLevelBuffers(physicalDevice, device, cmd, packed,
+                                               VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, out, staging, error);
       },
       &what);
   destroyStagingBuffer(device, staging);
@@ -472,6 +495,62 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, Vk
     if (error) *error = "level upload: " + what + " (VkResult " + std::to_string(r) + ")";
     return r;
   }
+  return VK_SUCCESS;
+}
+
+VkResult cmdWriteLevelBufferRanges(VkPhysicalDevice physicalDevice, VkDevice device, VkCommandBuffer cmd,
+                                   const VulkanLevelBuffers& buffers, const PackedLevelBuffers& packed,
+                                   const std::vector<GpuBufferRange>& ranges,
+                                   VkPipelineStageFlags shaderStages, VulkanStagingBuffer& staging,
+                                   std::string* error) {
+  staging = VulkanStagingBuffer{};
+  VkDeviceSize total = 0;
+  for (const GpuBufferRange& r : ranges) {
+    if (r.binding >= kGpuBindingCount || r.offset + r.bytes > packed.bytes[r.binding].size() ||
+        r.offset + r.bytes > buffers.sizes[r.binding] || r.offset % 4 != 0 || r.bytes % 4 != 0) {
+      if (error) *error = "buffer range outside its buffer, or not 4-byte aligned";
+      return VK_ERROR_INITIALIZATION_FAILED;
+    }
+    total += r.bytes;
+  }
+  if (total == 0) return VK_SUCCESS;
+  std::string what;
+  const VkResult res = vulkan_detail::createStagingBuffer(
+      physicalDevice, device, total,
+      [&](char* mapped) {
+        VkDeviceSize at = 0;
+        for (const GpuBufferRange& r : ranges) {
+          std::memcpy(mapped + at, packed.bytes[r.binding].data() + r.offset, size_t(r.bytes));
+          at += r.bytes;
+        }
+      },
+      staging, &what);
+  if (res != VK_SUCCESS) {
+    if (error) *error = what + " (VkResult " + std::to_string(res) + ")";
+    return res;
+  }
+  // Earlier reads of the buffers finish before the copies write (frames in flight), and the copies are
+  // visible to later reads.
+  VkMemoryBarrier before{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  before.srcAccessMask = VK_ACCESS_SHADER_READ_BIT;
+  before.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, shaderStages, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &before, 0, nullptr, 0,
+                       nullptr);
+  std::vector<VkDeviceSize> source(ranges.size());  // each range's place in the staging buffer, in order
+  for (size_t i = 1; i < ranges.size(); ++i) source[i] = source[i - 1] + ranges[i - 1].bytes;
+  for (uint32_t b = 0; b < kGpuBindingCount; ++b) {
+    std::vector<VkBufferCopy> regions;
+    for (size_t i = 0; i < ranges.size(); ++i)
+      if (ranges[i].binding == b)
+        regions.push_back(VkBufferCopy{source[i], ranges[i].offset, ranges[i].bytes});
+    if (!regions.empty())
+      vkCmdCopyBuffer(cmd, staging.buffer, buffers.buffers[b], uint32_t(regions.size()), regions.data());
+  }
+  VkMemoryBarrier after{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  after.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  after.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, shaderStages | VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                       1, &after, 0, nullptr, 0, nullptr);
   return VK_SUCCESS;
 }
 

@@ -14,6 +14,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "tetraprobe/runtime/gpu_layout.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shader_variant.h"
@@ -163,6 +164,10 @@ struct RenderOptions {
   // Empty: the level's own, shaderVariantFor(level, query.outerCells(), query.cellGrid()). A variant that
   // does not cover the level answers wrongly where the level uses what it leaves out.
   std::optional<ShaderVariant> variant;
+  // The level's GPU buffers as bytes to upload in place of packing `level` (e.g. a GpuSectorPool's buffers(),
+  // gpu_sector_pool.h, with its variant() in `variant`, which is then required). `level` still gives the
+  // origin and the probes' dots. Must stay valid during the call. Null: packLevelBuffers(level, query...).
+  const PackedLevelBuffers* levelBuffers = nullptr;
   // SPIR-V replacing lighting.comp (same interface and specialization constants; e.g. a debug build of the
   // lookup, for tests). Must stay valid during the call. Null: lighting.comp.
   const uint32_t* lightingSpirv = nullptr;

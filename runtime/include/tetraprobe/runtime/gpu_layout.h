@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <vector>
 
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
@@ -26,6 +27,13 @@ enum GpuBinding : uint32_t {
   kGpuBindingOcclusion =
       5,  // TetraprobeOcclusion: GpuOcclusionHeader, then uint32 data[] (records, planes, maps)
   kGpuBindingCount = 6,
+};
+
+// The bytes of the six buffers as the shader reads them, each zero-padded to a multiple of 64 bytes and at
+// least 64: exactly what an upload puts into each buffer (packLevelBuffers in vulkan_upload.h for a whole
+// level, GpuSectorPool in gpu_sector_pool.h for a streamed one).
+struct PackedLevelBuffers {
+  std::vector<char> bytes[kGpuBindingCount];  // indexed by GpuBinding
 };
 
 // Header of the TetraprobeTets buffer (16 bytes): the tets packed as gpu_tets.h says (GpuTetPacking), one

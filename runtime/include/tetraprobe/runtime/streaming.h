@@ -32,6 +32,21 @@ struct SectorKey {
   bool operator==(const SectorKey& o) const { return x == o.x && y == o.y && z == o.z; }
 };
 
+// One sector's records as the file holds them (global indices: the level's own tet and probe numbers).
+struct SectorRecords {
+  std::vector<uint32_t> tetIds, probeIds;  // increasing
+  std::vector<Tet> tets;                   // global probe indices; neighbours -1 (not stored per sector)
+  std::vector<glm::vec3> positions;        // probeIds[k]'s position (local frame)
+  std::vector<ShRgb> sh;                   // probeIds[k]'s SH
+  std::vector<TetOcclusion> occ;       // tetIds[k]'s record (offsets as in the file); empty without occlusion
+  std::vector<OcclusionPlane> planes;  // the sector's plane tets' planes, in tet order
+  std::vector<uint8_t> blocks;         // its shadow-map tets' blocks, in tet order
+  std::vector<BspNode> nodes;          // the cell's BSP: children >= 0 index `nodes`; leaves name global tets
+  int32_t root = kEmptyLeaf;
+  // Bytes the records hold (vector sizes).
+  size_t bytes() const;
+};
+
 class StreamingLevel {
  public:
   StreamingLevel();
@@ -65,6 +80,17 @@ class StreamingLevel {
   // loaded level, and a face shared by three loaded tets), leaving the other sectors loaded as they were;
   // the key not being a sector of the file is kCorrupt too. Not to be called while other threads query.
   LevelResult load(const SectorKey& key);
+  // Reads and checks one sector's records as load() does (the sector's CRC, index ranges, probe and BSP
+  // references within the sector), without loading it: for a consumer that keeps its own copy of the
+  // loaded sectors, such as the GPU pool (gpu_sector_pool.h). Cost proportional to the sector. The object
+  // is not changed (the file's read position aside); not to be called while other threads use it.
+  LevelResult readSector(const SectorKey& key, SectorRecords& out);
+  // The grid the sectors are cells of (min and cellSize; no slots), local frame, and the level's origin.
+  const CellGrid& sectorGrid() const { return grid_; }
+  const glm::dvec3& origin() const { return origin_; }
+  // Whether the file holds occlusion records (each sector's tets then carry theirs).
+  bool hasOcclusion() const;
+
   // Drops a sector and rebuilds the loaded level from the others. Unloading an absent sector does nothing.
   void unload(const SectorKey& key);
 
@@ -84,7 +110,7 @@ class StreamingLevel {
   const Level& loadedLevel() const { return fine_; }
 
  private:
-  struct Sector;
+  using Sector = SectorRecords;
   struct File;
   LevelResult openChecked(const std::string& path);
   // Joins the loaded sectors into fine_ and builds its query: "" or why the joined level is invalid (a face

@@ -17,6 +17,7 @@
 #include <vulkan/vulkan.h>
 
 #include "tetraprobe/runtime/gpu_layout.h"
+#include "tetraprobe/runtime/gpu_sector_pool.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shader_variant.h"
@@ -54,12 +55,6 @@ struct VulkanStagingBuffer {
 // Destroys the staging buffer and frees its memory (null handles are skipped); resets `staging`.
 void destroyStagingBuffer(VkDevice device, VulkanStagingBuffer& staging);
 
-// The bytes of the six buffers as the shader reads them (gpu_layout.h), each zero-padded to a multiple of 64
-// bytes and at least 64: exactly what an upload puts into each buffer.
-struct PackedLevelBuffers {
-  std::vector<char> bytes[kGpuBindingCount];  // indexed by GpuBinding
-};
-
 // Validates and packs `level` (tets, SH), `grid` (ProbeQuery::startGrid() of a query built on the same level)
 // and `outerCells` (ProbeQuery::outerCells(); may be empty: outside answers are then the clamped hull tet's)
 // and `cellGrid` (ProbeQuery::cellGrid(); may be empty: walks start from the start grid; uploaded as the start
@@ -92,6 +87,25 @@ VkResult cmdUploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device,
                                VulkanStagingBuffer& staging, std::string* error = nullptr,
                                int32_t maxWalkSteps = kGpuDefaultMaxWalkSteps);
 
+// cmdUploadLevelBuffers from bytes already packed (packLevelBuffers, or a GpuSectorPool's buffers()): the
+// same buffers, staging copy and barrier. Each packed buffer must be a positive multiple of 64 bytes.
+VkResult cmdUploadPackedLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkCommandBuffer cmd,
+                                     const PackedLevelBuffers& packed, VkPipelineStageFlags shaderStages,
+                                     VulkanLevelBuffers& out, VulkanStagingBuffer& staging,
+                                     std::string* error = nullptr);
+
+// Streaming (gpu_sector_pool.h): records copies of `ranges` of `packed` (a pool's buffers() after its loads
+// and evictions; ranges from takeDirtyRanges()) into `buffers` (uploaded from the same pool), through one
+// staging buffer holding just those bytes, between two barriers: reads by `shaderStages` recorded or
+// submitted earlier finish before the copies write, and later reads see them. The engine submits `cmd` and
+// frees `staging` once it has completed. An empty range list records nothing. A range outside its buffer or
+// not 4-byte aligned: VK_ERROR_INITIALIZATION_FAILED, nothing recorded.
+VkResult cmdWriteLevelBufferRanges(VkPhysicalDevice physicalDevice, VkDevice device, VkCommandBuffer cmd,
+                                   const VulkanLevelBuffers& buffers, const PackedLevelBuffers& packed,
+                                   const std::vector<GpuBufferRange>& ranges,
+                                   VkPipelineStageFlags shaderStages, VulkanStagingBuffer& staging,
+                                   std::string* error = nullptr);
+
 // Upload, submitted and waited for: cmdUploadLevelBuffers into a command buffer allocated from `pool` (of
 // `queue`'s family; the pool must not be used by another thread meanwhile), submitted to `queue` with a
 // fence, waited for, then the command buffer, fence and staging buffer are freed. On return the buffers
@@ -102,6 +116,11 @@ VkResult uploadLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, Vk
                             const std::vector<OuterCell>& outerCells, const CellGrid& cellGrid,
                             VulkanLevelBuffers& out, std::string* error = nullptr,
                             int32_t maxWalkSteps = kGpuDefaultMaxWalkSteps);
+
+// uploadLevelBuffers from bytes already packed (cmdUploadPackedLevelBuffers, submitted and waited for).
+VkResult uploadPackedLevelBuffers(VkPhysicalDevice physicalDevice, VkDevice device, VkQueue queue,
+                                  VkCommandPool pool, const PackedLevelBuffers& packed,
+                                  VulkanLevelBuffers& out, std::string* error = nullptr);
 
 // Destroys the buffers and frees their memory (null handles are skipped); resets `buffers`. The device must
 // no longer use them.
