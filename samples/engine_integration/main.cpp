@@ -16,11 +16,18 @@
 // finite, the sphere is darker in the room the lamp does not see (two_rooms: x > 4.2) than in the lit one,
 // and the GPU's probe buffer after the relight equals the packing of the relit level byte for byte.
 //
+// With --stream (a level with a streaming index, `tetraprobe stream`): the GPU side only, streamed by sector
+// (gpu_streaming.cpp): a camera's loop over the level with a fixed-size GPU pool within BUDGET (a share of
+// the full level's GPU bytes, default 0.25), a line per frame.
+//
 // Usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]  (default path: the two_rooms sample's rooms)
+//        engine_integration LEVEL.tpb --stream [BUDGET [FRAMES]]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <numbers>
 #include <vector>
 
@@ -30,6 +37,7 @@
 #include <tetraprobe/runtime/sh.h>
 
 #include "gpu_level.h"
+#include "gpu_streaming.h"
 
 namespace {
 
@@ -42,9 +50,26 @@ bool parseVec(const char* s, glm::dvec3& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 3 && argc <= 5 && std::strcmp(argv[2], "--stream") == 0) {
+    const double budget = argc >= 4 ? std::atof(argv[3]) : 0.25;
+    const int frames = argc >= 5 ? std::atoi(argv[4]) : 96;
+    if (!(budget > 0.0 && budget <= 1.0) || frames < 1) {
+      std::fprintf(stderr, "engine_integration: BUDGET in (0, 1], FRAMES >= 1\n");
+      return 2;
+    }
+    if (!std::filesystem::exists(argv[1])) {
+      std::fprintf(stderr, "engine_integration: %s: cannot open\n", argv[1]);
+      return 2;
+    }
+    const bool ok = runGpuStreaming(argv[1], budget, frames);
+    std::printf("%s\n", ok ? "ok" : "FAILED");
+    return ok ? 0 : 1;
+  }
   glm::dvec3 from(1.5, 1.0, 2.0), to(7.2, 1.0, 2.0);  // room A, through the doorway, into room B
   if (argc != 2 && !(argc == 4 && parseVec(argv[2], from) && parseVec(argv[3], to))) {
-    std::fprintf(stderr, "usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]\n");
+    std::fprintf(stderr,
+                 "usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]\n"
+                 "       engine_integration LEVEL.tpb --stream [BUDGET [FRAMES]]\n");
     return 2;
   }
   tetraprobe::Level level;

@@ -1,0 +1,198 @@
+// gpu_streaming: a camera flies a loop over a streamed level (`tetraprobe stream`) while the GPU holds only
+// the sectors nearest it, in a pool of fixed size (runtime/gpu_sector_pool.h) within a memory budget.
+// - Start: measureSectors reads every sector once for its size; the window (how many sectors are resident)
+//   is the largest whose pool fits the budget (a share of the full level's GPU bytes, packLevelBuffers);
+//   the pool's six buffers are uploaded once (cmdUploadPackedLevelBuffers), the coarse set in them.
+// - Each frame: the window's sectors are those whose cell centres lie nearest the camera; the others are
+//   evicted, the missing ones loaded (read from the file with seeks, written into free slots), and only the
+//   bytes those writes changed are copied to the GPU (cmdWriteLevelBufferRanges, one staged copy recorded
+//   into the frame's command buffer). A shader bound to the six buffers (tetraprobe.glsl, specialized with
+//   the pool's variant()) then answers as the full level wherever a loaded sector holds the point
+//   (tests/render/test_gpu_sector_pool.cpp renders it), and from the coarse set elsewhere.
+// Prints a line per frame (sectors loaded and evicted, GPU bytes held against the budget, bytes uploaded,
+// the time the loads took) and checks: the GPU's buffers, read back at the end, equal the pool's bytes; the
+// pool never exceeds the budget; and the flight loads and evicts at least 20 sectors each when the level has
+// more sectors than the window.
+#include "gpu_streaming.h"
+
+#include "engine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include <tetraprobe/runtime/gpu_sector_pool.h>
+#include <tetraprobe/runtime/query.h>
+#include <tetraprobe/runtime/streaming.h>
+#include <tetraprobe/runtime/vulkan_upload.h>
+
+using namespace tetraprobe;
+
+namespace {
+
+// The `window` sectors whose cell centres lie nearest the camera (local frame), ties by key.
+std::set<SectorKey> nearestSectors(const StreamingLevel& st, const glm::dvec3& local, size_t window) {
+  const CellGrid& g = st.sectorGrid();
+  std::vector<std::pair<double, SectorKey>> byDistance;
+  for (const SectorKey& k : st.sectors()) {
+    const glm::dvec3 centre = glm::dvec3(g.min) + (glm::dvec3(k.x, k.y, k.z) + 0.5) * double(g.cellSize);
+    const glm::dvec3 d = centre - local;
+    byDistance.emplace_back(glm::dot(d, d), k);
+  }
+  std::sort(byDistance.begin(), byDistance.end());
+  std::set<SectorKey> out;
+  for (size_t i = 0; i < byDistance.size() && i < window; ++i) out.insert(byDistance[i].second);
+  return out;
+}
+
+}  // namespace
+
+bool runGpuStreaming(const std::string& path, double budgetShare, int frames) {
+  StreamingLevel st;
+  if (LevelResult r = st.open(path); !r) {
+    std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
+    return false;
+  }
+  // The budget's base: what the whole level takes on the GPU (a tool computes this once, offline).
+  size_t fullBytes = 0;
+  {
+    Level full;
+    if (LevelResult r = loadLevel(path, full); !r) {
+      std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
+      return false;
+    }
+    const ProbeQuery q(full);
+    PackedLevelBuffers packed;
+    std::string error;
+    if (!packLevelBuffers(full, q.startGrid(), q.outerCells(), q.cellGrid(), packed, &error)) {
+      std::fprintf(stderr, "engine_integration: %s\n", error.c_str());
+      return false;
+    }
+    for (const std::vector<char>& b : packed.bytes) fullBytes += b.size();
+  }
+  const auto budget = size_t(budgetShare * double(fullBytes));
+  std::vector<GpuSectorSizes> sizes;
+  std::string error;
+  if (!measureSectors(st, sizes, &error)) {
+    std::fprintf(stderr, "engine_integration: %s\n", error.c_str());
+    return false;
+  }
+  uint32_t window = 0;
+  for (uint32_t n = 1; n <= uint32_t(sizes.size()); ++n)
+    if (gpuPoolBytes(st, gpuPoolCapacityFor(sizes, n)) <= budget) window = n;
+  if (window == 0) {
+    std::fprintf(stderr, "engine_integration: not even one sector fits in %zu bytes\n", budget);
+    return false;
+  }
+  const GpuPoolCapacity cap = gpuPoolCapacityFor(sizes, window);
+  std::printf(
+      "streaming: %zu sectors of %g m; full level %zu GPU bytes, budget %.0f %% = %zu bytes: a window of "
+      "%u sectors (pool %zu bytes)\n",
+      st.sectors().size(), double(st.sectorGrid().cellSize), fullBytes, 100.0 * budgetShare, budget, window,
+      gpuPoolBytes(st, cap));
+
+  Engine e;
+  if (!e.start()) {
+    std::printf("streaming: no Vulkan device, skipped\n");
+    return true;
+  }
+  const VkPipelineStageFlags readers =
+      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+  GpuSectorPool pool;
+  if (std::string err = pool.init(st, cap); !err.empty()) {
+    std::fprintf(stderr, "engine_integration: %s\n", err.c_str());
+    return false;
+  }
+  VulkanLevelBuffers buffers;
+  VulkanStagingBuffer staging;
+  bool ok = e.frame([&](VkCommandBuffer cmd) {
+    return cmdUploadPackedLevelBuffers(e.physical, e.device, cmd, pool.buffers(), readers, buffers, staging,
+                                       &error) == VK_SUCCESS;
+  });
+  destroyStagingBuffer(e.device, staging);
+  pool.takeDirtyRanges();  // the upload copied every byte
+  if (!ok) {
+    std::fprintf(stderr, "engine_integration: pool upload failed: %s\n", error.c_str());
+    destroyLevelBuffers(e.device, buffers);
+    return false;
+  }
+
+  // A loop over the sectors' extent at mid height: an ellipse through 80 % of it in x and z.
+  const CellGrid& g = st.sectorGrid();
+  glm::dvec3 lo(1e300), hi(-1e300);
+  for (const SectorKey& k : st.sectors()) {
+    const glm::dvec3 c = glm::dvec3(g.min) + (glm::dvec3(k.x, k.y, k.z) + 0.5) * double(g.cellSize);
+    lo = glm::min(lo, c);
+    hi = glm::max(hi, c);
+  }
+  const glm::dvec3 mid = 0.5 * (lo + hi), radius = 0.4 * (hi - lo) + 0.25 * double(g.cellSize);
+  int loads = 0, evictions = 0;
+  size_t peakInUse = 0;
+  for (int f = 0; f < frames && ok; ++f) {
+    const double a = 2.0 * std::numbers::pi * double(f) / double(frames);
+    const glm::dvec3 camera(mid.x + radius.x * std::cos(a), mid.y, mid.z + radius.z * std::sin(a));
+    const std::set<SectorKey> want = nearestSectors(st, camera, window);
+    int in = 0, out = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<SectorKey> drop;
+    for (const auto& [key, tets] : pool.loadedTets())
+      if (!want.count(key)) drop.push_back(key);
+    for (const SectorKey& k : drop) pool.evict(k), ++out;
+    for (const SectorKey& k : want) {
+      if (pool.isLoaded(k)) continue;
+      if (LevelResult r = pool.load(k); !r) {
+        std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
+        ok = false;
+        break;
+      }
+      ++in;
+    }
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const std::vector<GpuBufferRange> ranges = pool.takeDirtyRanges();
+    uint64_t uploaded = 0;
+    for (const GpuBufferRange& r : ranges) uploaded += r.bytes;
+    ok = ok && e.frame([&](VkCommandBuffer cmd) {
+      return cmdWriteLevelBufferRanges(e.physical, e.device, cmd, buffers, pool.buffers(), ranges, readers,
+                                       staging, &error) == VK_SUCCESS;
+    });
+    destroyStagingBuffer(e.device, staging);
+    loads += in;
+    evictions += out;
+    peakInUse = std::max(peakInUse, pool.bytesInUse());
+    ok = ok && pool.bytes() <= budget;
+    std::printf(
+        "frame %3d  camera (%7.1f, %5.1f, %7.1f)  sectors %2zu (+%d -%d)  GPU %zu of %zu bytes (%.1f %% "
+        "of the level), in use %zu  uploaded %llu bytes in %zu ranges  loads %.1f ms\n",
+        f, camera.x, camera.y, camera.z, pool.loadedSectors(), in, out, pool.bytes(), budget,
+        100.0 * double(pool.bytes()) / double(fullBytes), pool.bytesInUse(),
+        static_cast<unsigned long long>(uploaded), ranges.size(), ms);
+  }
+  if (!ok) std::fprintf(stderr, "engine_integration: streaming failed: %s\n", error.c_str());
+
+  // Check: every GPU buffer equals the pool's bytes after the last frame's ranges.
+  bool same = ok;
+  for (int i = 0; i < int(kGpuBindingCount) && same; ++i) {
+    std::vector<char> gpu;
+    same = readBuffer(e, buffers.buffers[i], buffers.sizes[i], gpu) &&
+           gpu.size() == pool.buffers().bytes[i].size() &&
+           std::memcmp(gpu.data(), pool.buffers().bytes[i].data(), gpu.size()) == 0;
+  }
+  destroyLevelBuffers(e.device, buffers);
+  const bool enough = st.sectors().size() <= window || (loads >= 20 && evictions >= 20);
+  std::printf(
+      "streaming: %d loads, %d evictions over %d frames; GPU %zu bytes (%.1f %% of the level, budget "
+      "%.0f %%), at most %zu in use; GPU buffers equal the pool's bytes: %s\n",
+      loads, evictions, frames, pool.bytes(), 100.0 * double(pool.bytes()) / double(fullBytes),
+      100.0 * budgetShare, peakInUse, same ? "yes" : "NO");
+  if (!enough) std::fprintf(stderr, "engine_integration: fewer than 20 loads and evictions\n");
+  return ok && same && enough;
+}
