@@ -8,7 +8,6 @@
 #include <cstring>
 
 #include "tetraprobe/runtime/face_blend.h"
-#include "tetraprobe/runtime/oct_normal.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/runtime/start_bricks.h"
@@ -19,7 +18,6 @@ namespace {
 // A plane tet's block: its `cells` word, then up to three planes of two uints (gpu_layout.h).
 constexpr uint32_t kPlaneBlockUints = 1 + 2 * 3;
 constexpr uint32_t kShadowBlockUints = kShadowMapBlockBytes / 4;
-constexpr int kBrickWalkSteps = 64;  // as buildStartBricks: a start, not an answer
 
 uint64_t pad64(uint64_t bytes) {
   return std::max<uint64_t>(64, (bytes + 63) / 64 * 64);
@@ -226,18 +224,9 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
   GpuOuterHeader oh{};
   oh.count = int32_t(parts.outer.size());
   put(b[kGpuBindingOuterCells], 0, oh);
-  for (size_t k = 0; k < parts.outer.size(); ++k) {
-    const OuterCell& c = parts.outer[k];
-    GpuOuterCell g{};
-    for (int i = 0; i < 3; ++i) {
-      g.n[i] = encodeOctNormal(glm::dvec3(c.normal[i][0], c.normal[i][1], c.normal[i][2]));
-      g.v[i] = c.v[i];
-      g.link[i] = c.n[i];
-    }
-    g.v[3] = c.tet;
-    g.link[3] = c.face;
-    put(b[kGpuBindingOuterCells], kGpuOuterCellsOffset + sizeof(GpuOuterCell) * k, g);
-  }
+  for (size_t k = 0; k < parts.outer.size(); ++k)
+    put(b[kGpuBindingOuterCells], kGpuOuterCellsOffset + sizeof(GpuOuterCell) * k,
+        gpuOuterCell(parts.outer[k]));
   GpuCellGridHeader ch{};
   for (int a = 0; a < 3; ++a) ch.min[a] = grid_.min[a];
   ch.cellSize = grid_.cellSize;
@@ -558,8 +547,8 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
   if (occlusion_)
     for (int32_t s : added) writeOcclusionHeader(s);
 
-  // The start brick: each sub-cell's centre descends the cell's BSP to its leaf tet, then walks (in float,
-  // as the shader) toward the centre over the resident tets; an empty leaf takes the previous entry's start.
+  // The start brick: each sub-cell's centre descends the cell's BSP to its leaf tet, then walks toward the
+  // centre over the resident tets as buildStartBricks does; an empty leaf takes the previous entry's start.
   const int32_t brick = freeBricks_.back();
   freeBricks_.pop_back();
   const int32_t dim = kStartBrickDim;
@@ -575,16 +564,7 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
         while (node >= 0) node = cellGridChild(r.nodes[size_t(node)], centre);
         const int32_t leaf = bspLeafTet(node);
         int32_t cur = leaf >= 0 ? tetSlot_.at(uint32_t(leaf)) : previous;
-        const glm::vec3 x(centre);
-        for (int step = 0; step < kBrickWalkSteps; ++step) {
-          const Tet& t = pool_.tets[size_t(cur)];
-          const glm::vec4 w = baryWeights(baryFrame(t, pool_.probes), x);
-          int m = 0;
-          for (int a = 1; a < 4; ++a)
-            if (w[a] < w[m]) m = a;
-          if (!(w[m] < 0.0f) || t.n[m] < 0) break;
-          cur = t.n[m];
-        }
+        cur = startBrickWalk(pool_, cur, glm::vec3(centre));
         starts[size_t(i + dim * (j + dim * k))] = cur;
         previous = cur;
       }

@@ -25,9 +25,9 @@ int32_t startGridTet(const StartGrid& g, const glm::dvec3& x) {
   return g.startTet[size_t(c[0] + g.dims.x * (c[1] + g.dims.y * c[2]))];
 }
 
-// Walks from `cur` across the face of the most negative float weight until x is inside, a hull face is
-// reached or the bound runs out; returns where it stopped (a start for the shader's own walk).
-int32_t walkToward(const Level& level, int32_t cur, const glm::vec3& x) {
+}  // namespace
+
+int32_t startBrickWalk(const Level& level, int32_t cur, const glm::vec3& x) {
   for (int step = 0; step < kBrickWalkSteps; ++step) {
     const Tet& t = level.tets[size_t(cur)];
     const glm::vec4 w = baryWeights(baryFrame(t, level.probes), x);
@@ -39,8 +39,6 @@ int32_t walkToward(const Level& level, int32_t cur, const glm::vec3& x) {
   }
   return cur;
 }
-
-}  // namespace
 
 size_t startBricksBytes(const CellGrid& cellGrid, size_t tets, int32_t dim) {
   const size_t cells = occupiedCells(cellGrid);
@@ -73,7 +71,7 @@ StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const Ce
                                         double(cellGrid.cellSize);
           int32_t start = cellGridLeaf(cellGrid, centre);
           if (start < 0 || size_t(start) >= level.tets.size()) start = startGridTet(grid, centre);
-          b.startTet.push_back(walkToward(level, start, glm::vec3(centre)));
+          b.startTet.push_back(startBrickWalk(level, start, glm::vec3(centre)));
         }
   }
   return b;

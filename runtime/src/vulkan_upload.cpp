@@ -300,15 +300,7 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   outerHeader.count = int32_t(cellCount);
   appendBytes(data[kGpuBindingOuterCells], &outerHeader, 1);
   for (const OuterCell& c : outerCells) {
-    GpuOuterCell g{};
-    for (int i = 0; i < 3; ++i) {
-      // The normals are on the code lattice already (buildOuterCells, loadLevel): their code decodes to them.
-      g.n[i] = encodeOctNormal(glm::dvec3(c.normal[i][0], c.normal[i][1], c.normal[i][2]));
-      g.v[i] = c.v[i];
-      g.link[i] = c.n[i];
-    }
-    g.v[3] = c.tet;
-    g.link[3] = c.face;
+    const GpuOuterCell g = gpuOuterCell(c);
     appendBytes(data[kGpuBindingOuterCells], &g, 1);
   }
   GpuCellGridHeader cellHeader{};

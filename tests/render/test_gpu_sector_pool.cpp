@@ -25,9 +25,14 @@ namespace {
 // A 72 x 6 x 72 m level of jittered probes at 3 m (5 x 1 x 5 sectors), distinct SH, synthetic occlusion,
 // streamed; and a mesh of ground and blocks inside it.
 struct StreamedScene {
-  std::string path;
+  std::string path;  // the streamed level file, removed with the scene
   Level full;
   RenderMesh mesh;
+  StreamedScene() = default;
+  StreamedScene(StreamedScene&&) = default;
+  ~StreamedScene() {
+    if (!path.empty()) std::filesystem::remove(path);
+  }
 };
 
 StreamedScene makeStreamedScene() {
@@ -97,10 +102,6 @@ std::set<SectorKey> windowAt(const StreamingLevel& st, const glm::dvec3& world) 
 
 TEST(GpuSectorPool, StreamedFlyThroughRendersTheFullLevelsPixelsWhereLoaded) {
   const StreamedScene scene = makeStreamedScene();
-  struct Remove {
-    std::string p;
-    ~Remove() { std::filesystem::remove(p); }
-  } remove{scene.path};
   Level full;
   ASSERT_TRUE(loadLevel(scene.path, full));
   const ProbeQuery whole(full);
@@ -208,10 +209,6 @@ TEST(GpuSectorPool, StreamedFlyThroughRendersTheFullLevelsPixelsWhereLoaded) {
 // loading again leaks no slot.
 TEST(GpuSectorPool, ALoadThatDoesNotFitChangesNothingAndReloadsLeakNoSlot) {
   const StreamedScene scene = makeStreamedScene();
-  struct Remove {
-    std::string p;
-    ~Remove() { std::filesystem::remove(p); }
-  } remove{scene.path};
   StreamingLevel st;
   ASSERT_TRUE(st.open(scene.path));
   std::vector<GpuSectorSizes> sizes;

@@ -11,6 +11,7 @@
 #include "tetraprobe/runtime/cell_grid.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/occlusion_data.h"
+#include "tetraprobe/runtime/oct_normal.h"
 #include "tetraprobe/runtime/sh.h"
 #include "tetraprobe/runtime/sh_half.h"
 
@@ -97,6 +98,20 @@ static_assert(sizeof(GpuOuterCell) == 48 && offsetof(GpuOuterCell, link) == 16 &
                   offsetof(GpuOuterCell, n) == 32,
               "TetraprobeOuterCell: std430 array stride 48");
 inline constexpr size_t kGpuOuterCellsOffset = sizeof(GpuOuterHeader);
+
+// An outer cell as the shader reads it. The normals are on the code lattice already (buildOuterCells,
+// loadLevel): their code decodes to them.
+inline GpuOuterCell gpuOuterCell(const OuterCell& c) {
+  GpuOuterCell g{};
+  for (int i = 0; i < 3; ++i) {
+    g.n[i] = encodeOctNormal(glm::dvec3(c.normal[i][0], c.normal[i][1], c.normal[i][2]));
+    g.v[i] = c.v[i];
+    g.link[i] = c.n[i];
+  }
+  g.v[3] = c.tet;
+  g.link[3] = c.face;
+  return g;
+}
 
 // Header of the TetraprobeCells buffer (32 bytes): the start bricks of start_bricks.h (the cell grid's hash
 // table with a brick per occupied cell; the BSP stays on the CPU). The int32 data[] that follows at offset 32

@@ -45,6 +45,11 @@ struct StartBricks {
 StartBricks buildStartBricks(const Level& level, const StartGrid& grid, const CellGrid& cellGrid,
                              int32_t dim = kStartBrickDim);
 
+// A brick entry's walk: from tet `start` across the face of the most negative float weight until local point
+// x is inside, a face without a neighbour is reached, or 64 steps; returns where it stopped (a start for the
+// shader's own walk, not an answer). `start` must be a tet of `level`.
+int32_t startBrickWalk(const Level& level, int32_t start, const glm::vec3& x);
+
 // What the bricks take on the GPU for `cellGrid` on a level of `tets` tets: 16 bytes a hash slot, and the
 // sub-cells' start tets packed at bitsFor(tets) bits each (the tets' neighbour width, gpu_tets.h) in whole
 // words plus one zero word; 0 without cells.
