@@ -14,8 +14,9 @@ PACKAGES=(
   libglm-dev libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
-  # the scale benchmark (bench/scale.py) and the sample generators (samples/*/make_*.py)
-  python3
+  # the scale benchmark (bench/scale.py) and the sample generators (samples/*/make_*.py); the scheduler
+  # files' test (tests/cli/scheduler_manifests_test.py) parses YAML
+  python3 python3-yaml
   # fuzzing (make fuzz): clang 14 and its runtime libraries; libclang_rt.fuzzer is in libclang-rt-14-dev
   clang libclang-rt-14-dev
 )
