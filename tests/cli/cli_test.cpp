@@ -433,6 +433,31 @@ TEST_F(Cli, StreamedLevelAnswersLikeTheFullLevel) {
   EXPECT_EQ(exactAll, inside);
   EXPECT_EQ(exact, inside);
   EXPECT_GT(inside, points.size() / 2);
+
+  // render --stream-window: the GPU lookup over a sector pool with the sectors nearest the target, its pixels
+  // from loaded sectors equal to the full level's (the command checks and fails otherwise); a level without
+  // an index is refused with one line.
+  const std::string view = " --eye 10,40,10 --target 20,5,30 --size 64x36 -o " + path("s.png").string();
+  const CliRun r = run("render " + path("big.scene.json").string() + " " + path("streamed.tpb").string() +
+                       view + " --stream-window 3");
+  if (tetraprobe::test::isNoVulkan(r.err)) TETRAPROBE_SKIP_MISSING(r.err);
+  ASSERT_EQ(r.code, 0) << r.err;
+  size_t loadedSectors = 0, pool = 0, loaded = 0, equal = 0, coarse = 0, total = 0;
+  ASSERT_EQ(
+      std::sscanf(r.out.c_str(),
+                  "tetraprobe render: streamed: %zu of %zu sectors loaded into a %zu-byte GPU pool; %zu "
+                  "geometry pixels from loaded sectors (%zu equal to the full level's), %zu from the "
+                  "coarse set",
+                  &loadedSectors, &total, &pool, &loaded, &equal, &coarse),
+      6)
+      << r.out;
+  EXPECT_EQ(loadedSectors, 3u);
+  EXPECT_GT(loaded, 100u);
+  EXPECT_EQ(equal, loaded);
+  const CliRun unindexed = run("render " + path("big.scene.json").string() + " " + path("full.tpb").string() +
+                               view + " --stream-window 3");
+  EXPECT_EQ(unindexed.code, 2);
+  EXPECT_NE(unindexed.err.find("streaming index"), std::string::npos) << unindexed.err;
 }
 
 // A streamed level whose payload was edited and its CRC recomputed (so `open` accepts it) is still refused at

@@ -16,6 +16,7 @@
 #include "args.h"
 #include "commands.h"
 #include "render_view.h"
+#include "stream_view.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/eval/error_image.h"
@@ -46,7 +47,7 @@ bool gpuMode(const std::string& mode, RenderMode* out) {
 
 // Options that only the traced modes (reference, error) take, and those only the GPU modes take.
 constexpr const char* kTracedOnly[] = {"--samples", "--max-seconds", "--bounces", "--seed", "--threads"};
-constexpr const char* kGpuOnly[] = {"--frames", "--shadow-map-size", "--half-res"};
+constexpr const char* kGpuOnly[] = {"--frames", "--shadow-map-size", "--half-res", "--stream-window"};
 
 // Above this mean relative standard error the reference's own noise shows in the error image (0.1 is
 // about 0.14 stops per pixel).
@@ -199,6 +200,15 @@ int cmdRender(int argc, char** argv) {
             "irradiance/indirect: the half-resolution lookup an engine may choose (one lookup a 2x2 block,\n"
             "upsampled by depth and normal, full lookups where no sample matches; shaders/"
             "tetraprobe_upsample.glsl)",
+            ""},
+           {"--stream-window", "", "N",
+            "irradiance/indirect/full, a level with a streaming index (tetraprobe stream): the lookup reads "
+            "a\n"
+            "GPU sector pool holding the N sectors nearest the view's target, as an engine streaming the "
+            "level\n"
+            "shows it (the coarse set elsewhere); prints how many pixels come from loaded sectors and that "
+            "they\n"
+            "equal the full level's (docs/streaming.md)",
             ""}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);
@@ -231,6 +241,12 @@ int cmdRender(int argc, char** argv) {
     throw UsageError("--shadow-map-size applies to --mode full only");
   if (args.has("--half-res") && !(view.mode == RenderMode::kIrradiance || view.mode == RenderMode::kIndirect))
     throw UsageError("--half-res applies to --mode irradiance and indirect only");
+  if (args.has("--stream-window") && !(view.mode == RenderMode::kIrradiance ||
+                                       view.mode == RenderMode::kIndirect || view.mode == RenderMode::kFull))
+    throw UsageError("--stream-window applies to --mode irradiance, indirect and full only");
+  const int streamWindow = args.has("--stream-window") ? args.integer("--stream-window") : 0;
+  if (args.has("--stream-window") && (streamWindow < 1 || streamWindow > 65536))
+    throw UsageError("--stream-window must be in 1..65536");
   RenderOptions options;
   options.halfResolution = args.has("--half-res");
   if (!traced) {
@@ -269,8 +285,29 @@ int cmdRender(int argc, char** argv) {
     std::fprintf(stderr,
                  "tetraprobe render: warning: the level records no probe kinds (baked before they were "
                  "stored): every probe is drawn white\n");
+  // --stream-window: the pool's buffers in place of the level's, and the full level's render to compare.
+  std::unique_ptr<StreamView> stream;
+  if (streamWindow > 0) {
+    stream = openStreamView(args.positional()[1], size_t(streamWindow), glm::dvec3(view.target));
+    options.levelBuffers = &stream->pool.buffers();
+    options.variant = stream->pool.variant();
+  }
   const auto t0 = std::chrono::steady_clock::now();
   RenderResult result = renderLevel(toRenderMesh(scene), level, query, view, options);
+  if (stream) {
+    RenderOptions fullOptions = options;
+    fullOptions.levelBuffers = nullptr;
+    fullOptions.variant.reset();
+    const RenderResult full = renderLevel(toRenderMesh(scene), level, query, view, fullOptions);
+    const StreamViewPixels n = compareStreamView(*stream, level.origin, full, result);
+    std::printf(
+        "tetraprobe render: streamed: %zu of %zu sectors loaded into a %zu-byte GPU pool; %zu geometry "
+        "pixels from loaded sectors (%zu equal to the full level's), %zu from the coarse set\n",
+        stream->pool.loadedSectors(), stream->level.sectors().size(), stream->pool.bytes(), n.loaded,
+        n.identical, n.coarse);
+    if (n.identical != n.loaded)
+      throw std::runtime_error("streamed pixels differ from the full level's where their sector is loaded");
+  }
   if (options.halfResolution) {  // the image written: the half-resolution answer, a = 1 on geometry
     result.color = std::move(result.halfResolution);
     for (size_t i = 3; i < result.color.rgba.size(); i += 4)
