@@ -3,9 +3,10 @@
 // of this process's own and opened twice: as it is, then with every checksum recomputed
 // (recomputeLevelChecksums, level_file.h: header, table, payload, the index's and each sector's), so the
 // mutations reach the table, the index, the sectors' records and validateLevel. Whatever opens has each
-// sector loaded (alone, then all together), queried at its centre and unloaded. Any crash, sanitizer
-// report, leak or hang is a bug; an error result is the expected outcome. Built by `make fuzz` with clang
-// (-fsanitize=fuzzer,address,undefined); seeds: tools/fuzz/make_seeds.sh (streamed levels).
+// sector loaded (alone, then all together), queried at its centre and unloaded, and goes through the GPU
+// sector pool (loads and evictions). Any crash, sanitizer report, leak or hang is a bug; an error result is
+// the expected outcome. Built by `make fuzz` with clang (-fsanitize=fuzzer,address,undefined); seeds:
+// tools/fuzz/make_seeds.sh (streamed levels).
 #include <unistd.h>
 
 #include <cstddef>
@@ -18,6 +19,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "tetraprobe/runtime/gpu_sector_pool.h"
 #include "tetraprobe/runtime/level_file.h"
 #include "tetraprobe/runtime/streaming.h"
 
@@ -49,6 +51,21 @@ void openAndLoad(const std::vector<uint8_t>& bytes) {
   for (const tetraprobe::SectorKey& key : st.sectors())
     if (++tries <= 64) (void)st.load(key);
   sink = sink + st.query(st.coarse().origin + glm::dvec3(1.0, 2.0, 3.0), up).y + float(st.bytesInUse());
+  // The GPU sector pool over the same file: sized for four sectors, each of the first 64 loaded, evicted
+  // every other one, so the slot lists, the links and the cells' hash are exercised on hostile sectors.
+  tetraprobe::StreamingLevel forPool;
+  if (!forPool.open(file())) return;
+  std::vector<tetraprobe::GpuSectorSizes> sizes;
+  tetraprobe::GpuSectorPool pool;
+  if (!tetraprobe::measureSectors(forPool, sizes) || sizes.size() > 4096 ||
+      !pool.init(forPool, tetraprobe::gpuPoolCapacityFor(sizes, 4)).empty())
+    return;
+  tries = 0;
+  for (const tetraprobe::SectorKey& key : forPool.sectors()) {
+    if (++tries > 64) break;
+    if (pool.load(key) && tries % 2 == 0) pool.evict(key);
+  }
+  sink = sink + float(pool.takeDirtyRanges().size() + pool.bytesInUse());
   (void)sink;
 }
 
