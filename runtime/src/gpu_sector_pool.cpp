@@ -576,7 +576,8 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
   return {};
 }
 
-void GpuSectorPool::evict(const SectorKey& key) {
+void GpuSectorPool::evict(const SectorKey& which) {
+  const SectorKey key = which;  // `which` may be a key of the maps erased below (loadedTets())
   const auto it = sectors_.find(key);
   if (it == sectors_.end()) return;
   eraseCell(key);

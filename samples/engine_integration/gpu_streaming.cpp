@@ -1,10 +1,12 @@
 // gpu_streaming: a camera flies a loop over a streamed level (`tetraprobe stream`) while the GPU holds only
 // the sectors nearest it, in a pool of fixed size (runtime/gpu_sector_pool.h) within a memory budget.
 // - Start: measureSectors reads every sector once for its size; the window (how many sectors are resident)
-//   is the largest whose pool fits the budget (a share of the full level's GPU bytes, packLevelBuffers);
+//   is the largest count of sectors any of which the pool holds at once within the budget (a share of the full
+//   level's GPU bytes, packLevelBuffers); neighbouring sectors share tets, so more usually fit;
 //   the pool's six buffers are uploaded once (cmdUploadPackedLevelBuffers), the coarse set in them.
-// - Each frame: the window's sectors are those whose cell centres lie nearest the camera; the others are
-//   evicted, the missing ones loaded (read from the file with seeks, written into free slots), and only the
+// - Each frame: the sectors whose cell centres lie nearest the camera are loaded nearest first while they fit
+//   (at least the window; up to twice it), the others evicted; a load reads the sector from the file and
+//   writes it into free slots, and only the
 //   bytes those writes changed are copied to the GPU (cmdWriteLevelBufferRanges, one staged copy recorded
 //   into the frame's command buffer). A shader bound to the six buffers (tetraprobe.glsl, specialized with
 //   the pool's variant()) then answers as the full level wherever a loaded sector holds the point
@@ -21,8 +23,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -38,8 +40,8 @@ using namespace tetraprobe;
 
 namespace {
 
-// The `window` sectors whose cell centres lie nearest the camera (local frame), ties by key.
-std::set<SectorKey> nearestSectors(const StreamingLevel& st, const glm::dvec3& local, size_t window) {
+// The `count` sectors whose cell centres lie nearest the camera (local frame), nearest first, ties by key.
+std::vector<SectorKey> nearestSectors(const StreamingLevel& st, const glm::dvec3& local, size_t count) {
   const CellGrid& g = st.sectorGrid();
   std::vector<std::pair<double, SectorKey>> byDistance;
   for (const SectorKey& k : st.sectors()) {
@@ -48,8 +50,8 @@ std::set<SectorKey> nearestSectors(const StreamingLevel& st, const glm::dvec3& l
     byDistance.emplace_back(glm::dot(d, d), k);
   }
   std::sort(byDistance.begin(), byDistance.end());
-  std::set<SectorKey> out;
-  for (size_t i = 0; i < byDistance.size() && i < window; ++i) out.insert(byDistance[i].second);
+  std::vector<SectorKey> out;
+  for (size_t i = 0; i < byDistance.size() && i < count; ++i) out.push_back(byDistance[i].second);
   return out;
 }
 
@@ -85,14 +87,20 @@ bool runGpuStreaming(const std::string& path, double budgetShare, int frames) {
     std::fprintf(stderr, "engine_integration: %s\n", error.c_str());
     return false;
   }
+  // Slots for any `n` sectors at once, and bricks (8.7 KB each) for twice as many: neighbours share tets.
+  const auto capacityFor = [&](uint32_t n) {
+    GpuPoolCapacity c = gpuPoolCapacityFor(sizes, n);
+    c.sectors = uint32_t(std::min<size_t>(2 * size_t(n), sizes.size()));
+    return c;
+  };
   uint32_t window = 0;
   for (uint32_t n = 1; n <= uint32_t(sizes.size()); ++n)
-    if (gpuPoolBytes(st, gpuPoolCapacityFor(sizes, n)) <= budget) window = n;
+    if (gpuPoolBytes(st, capacityFor(n)) <= budget) window = n;
   if (window == 0) {
     std::fprintf(stderr, "engine_integration: not even one sector fits in %zu bytes\n", budget);
     return false;
   }
-  const GpuPoolCapacity cap = gpuPoolCapacityFor(sizes, window);
+  const GpuPoolCapacity cap = capacityFor(window);
   std::printf(
       "streaming: %zu sectors of %g m; full level %zu GPU bytes, budget %.0f %% = %zu bytes: a window of "
       "%u sectors (pool %zu bytes)\n",
@@ -139,16 +147,32 @@ bool runGpuStreaming(const std::string& path, double budgetShare, int frames) {
   for (int f = 0; f < frames && ok; ++f) {
     const double a = 2.0 * std::numbers::pi * double(f) / double(frames);
     const glm::dvec3 camera(mid.x + radius.x * std::cos(a), mid.y, mid.z + radius.z * std::sin(a));
-    const std::set<SectorKey> want = nearestSectors(st, camera, window);
+    // The pool's capacity holds any `window` sectors; neighbouring sectors share tets, so more usually fit.
+    // Nearest first, up to twice the window: a load that finds no room evicts the farthest loaded sector
+    // behind it, and past the window a load that still finds none ends the frame's loading.
+    const std::vector<SectorKey> order = nearestSectors(st, camera, 2 * size_t(window));
+    std::map<SectorKey, size_t> rank;
+    for (size_t i = 0; i < order.size(); ++i) rank[order[i]] = i;
     int in = 0, out = 0;
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<SectorKey> drop;
     for (const auto& [key, tets] : pool.loadedTets())
-      if (!want.count(key)) drop.push_back(key);
+      if (!rank.count(key)) drop.push_back(key);
     for (const SectorKey& k : drop) pool.evict(k), ++out;
-    for (const SectorKey& k : want) {
-      if (pool.isLoaded(k)) continue;
-      if (LevelResult r = pool.load(k); !r) {
+    for (size_t i = 0; i < order.size() && ok; ++i) {
+      if (pool.isLoaded(order[i])) continue;
+      LevelResult r = pool.load(order[i]);
+      while (r.status == LevelStatus::kTooLarge) {
+        bool found = false;
+        SectorKey farthest;
+        for (const auto& [key, tets] : pool.loadedTets())
+          if (rank.at(key) > i && (!found || rank.at(key) > rank.at(farthest))) farthest = key, found = true;
+        if (!found) break;
+        pool.evict(farthest), ++out;
+        r = pool.load(order[i]);
+      }
+      if (r.status == LevelStatus::kTooLarge && i >= window) break;  // the pool is full past the window
+      if (!r) {
         std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
         ok = false;
         break;
