@@ -10,6 +10,7 @@
 #include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/runtime/shade.h"
 #include "tetraprobe/runtime/start_bricks.h"
 
 namespace tetraprobe {
@@ -236,6 +237,8 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
   ch.brickDim = kStartBrickDim;
   put(b[kGpuBindingCells], 0, ch);
   table_.assign(tableSlots_, CellSlot{{INT32_MIN, 0, 0}, 0});
+  brickStarts_.assign(size_t(capacity.sectors) * kStartBrickDim * kStartBrickDim * kStartBrickDim, 0);
+  coarseQuery_ = std::make_unique<ProbeQuery>(coarse, grid_.cellSize, 1);
   for (size_t h = 0; h < tableSlots_; ++h) writeCellSlot(h);
   GpuOcclusionHeader och{};
   if (occlusion_) {
@@ -348,6 +351,7 @@ void GpuSectorPool::writeBrick(int32_t brick, const std::vector<int32_t>& startT
   const uint64_t firstBit = uint64_t(brick) * perBrick * bits, lastBit = firstBit + perBrick * bits;
   auto* words = reinterpret_cast<uint32_t*>(b.data() + cellBricks_);
   for (uint64_t e = 0; e < perBrick; ++e) putBits(words, firstBit + e * bits, bits, uint32_t(startTets[e]));
+  std::copy(startTets.begin(), startTets.end(), brickStarts_.begin() + ptrdiff_t(perBrick * uint64_t(brick)));
   const uint64_t w0 = firstBit / 32, w1 = (lastBit + 31) / 32;
   markDirty(kGpuBindingCells, cellBricks_ + 4 * w0, 4 * (w1 - w0));
 }
@@ -387,6 +391,41 @@ void GpuSectorPool::eraseCell(const SectorKey& key) {
   }
   table_[hole] = CellSlot{{INT32_MIN, 0, 0}, 0};
   writeCellSlot(hole);
+}
+
+bool GpuSectorPool::locateLoaded(const glm::dvec3& world, Location& loc) const {
+  if (!level_ || sectors_.empty()) return false;
+  const glm::dvec3 x = world - pool_.origin;
+  int32_t key[3];
+  if (!cellGridKey(grid_, x, key)) return false;  // not finite, or beyond the key range
+  const size_t mask = tableSlots_ - 1;
+  size_t h = size_t(cellHash(key[0], key[1], key[2])) & mask;
+  while (table_[h].key[0] != INT32_MIN &&
+         !(table_[h].key[0] == key[0] && table_[h].key[1] == key[1] && table_[h].key[2] == key[2]))
+    h = (h + 1) & mask;
+  if (table_[h].key[0] == INT32_MIN) return false;
+  // The sub-cell as the shader finds it (tetraprobeCellStartTet).
+  const int dim = kStartBrickDim;
+  int s[3];
+  for (int a = 0; a < 3; ++a) {
+    const double g = (x[a] - double(grid_.min[a])) / double(grid_.cellSize) - double(key[a]);
+    s[a] = int(std::clamp(g * double(dim), 0.0, double(dim - 1)));
+  }
+  const size_t entry =
+      size_t(table_[h].root) * size_t(dim * dim * dim) + size_t(s[0] + dim * (s[1] + dim * s[2]));
+  return locateByWalk(pool_, x, brickStarts_[entry], loc);
+}
+
+bool GpuSectorPool::answersFromLoaded(const glm::dvec3& world) const {
+  Location loc;
+  return locateLoaded(world, loc);
+}
+
+glm::vec3 GpuSectorPool::irradiance(const glm::dvec3& world, const glm::vec3& normal) const {
+  Location loc;
+  if (locateLoaded(world, loc))
+    return shadeLocated(pool_, occlusion_ ? &pool_.occlusion : nullptr, loc, world, normal);
+  return coarseQuery_ ? coarseQuery_->irradiance(world, normal) : glm::vec3(0.0f);
 }
 
 GpuSectorPool::FaceKey GpuSectorPool::faceKey(int32_t slot, int k) const {

@@ -532,6 +532,15 @@ Location ProbeQuery::walkFrom(const glm::dvec3& x, int32_t start, int32_t hint) 
   return cell >= 0 ? outerLocate(x, cell) : loc;
 }
 
+bool locateByWalk(const Level& level, const glm::dvec3& x, int32_t start, Location& out) {
+  if (start < 0 || size_t(start) >= level.tets.size()) return false;
+  Location loc;
+  int32_t exitFace = -1;
+  if (!walk(level.tets, level.probes, x, start, kMaxWalkSteps, loc, &exitFace) || exitFace >= 0) return false;
+  out = loc;
+  return true;
+}
+
 Location ProbeQuery::locate(const glm::dvec3& world, int32_t hint) const {
   if (level_.tets.empty()) return Location{};
   const glm::dvec3 x = sanitize(world - level_.origin, grid_);

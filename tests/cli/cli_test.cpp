@@ -22,6 +22,7 @@
 #include "image_compare.h"
 #include "level_bytes.h"
 #include "missing_capability.h"
+#include "tetraprobe/runtime/gpu_sector_pool.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/query.h"
@@ -433,6 +434,40 @@ TEST_F(Cli, StreamedLevelAnswersLikeTheFullLevel) {
   EXPECT_EQ(exactAll, inside);
   EXPECT_EQ(exact, inside);
   EXPECT_GT(inside, points.size() / 2);
+
+  // The GPU sector pool's CPU answers (no joined level): sized for two sectors, it loads them in pairs,
+  // evicting the older, and answers as the full level wherever StreamingLevel with the same two sectors
+  // answers from them; elsewhere finitely (the coarse set).
+  {
+    tetraprobe::StreamingLevel forPool, pair;
+    ASSERT_TRUE(forPool.open(path("streamed.tpb").string()));
+    ASSERT_TRUE(pair.open(path("streamed.tpb").string()));
+    std::vector<tetraprobe::GpuSectorSizes> sizes;
+    ASSERT_TRUE(tetraprobe::measureSectors(forPool, sizes));
+    tetraprobe::GpuSectorPool pool;
+    ASSERT_EQ(pool.init(forPool, tetraprobe::gpuPoolCapacityFor(sizes, 2)), "");
+    size_t fromPool = 0;
+    const std::vector<tetraprobe::SectorKey>& keys = forPool.sectors();
+    for (size_t k = 0; k < keys.size(); ++k) {
+      if (k >= 2) {
+        pool.evict(keys[k - 2]);
+        pair.unload(keys[k - 2]);
+      }
+      ASSERT_TRUE(pool.load(keys[k]));
+      ASSERT_TRUE(pair.load(keys[k]));
+      for (size_t i = 0; i < points.size(); ++i) {
+        const glm::vec3 e = pool.irradiance(points[i], normals[i]);
+        ASSERT_EQ(pool.answersFromLoaded(points[i]), pair.answersFromLoaded(points[i])) << k << " " << i;
+        if (pool.answersFromLoaded(points[i])) {
+          ++fromPool;
+          EXPECT_TRUE(same(e, whole.irradiance(points[i], normals[i]))) << "pool, point " << i;
+        } else {
+          ASSERT_TRUE(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) << i;
+        }
+      }
+    }
+    EXPECT_GT(fromPool, inside) << "every point inside answered from the pool at least once";
+  }
 
   // render --stream-window: the GPU lookup over a sector pool with the sectors nearest the target, its pixels
   // from loaded sectors equal to the full level's (the command checks and fails otherwise); a level without

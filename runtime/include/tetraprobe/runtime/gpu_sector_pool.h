@@ -31,12 +31,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
 #include "tetraprobe/runtime/gpu_layout.h"
 #include "tetraprobe/runtime/gpu_tets.h"
+#include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shader_variant.h"
 #include "tetraprobe/runtime/streaming.h"
 
@@ -90,6 +92,15 @@ class GpuSectorPool {
   size_t loadedSectors() const { return sectors_.size(); }
   const std::map<SectorKey, std::vector<uint32_t>>& loadedTets() const { return sectorTets_; }
 
+  // CPU queries on what the pool holds, for objects and other CPU consumers of a streamed level: the
+  // irradiance at a world point with a unit normal, from the loaded sectors where answersFromLoaded(), else
+  // from the coarse set. Inside a loaded sector's tets it is what ProbeQuery::irradiance on the full level
+  // returns (bit for bit, as StreamingLevel::query), with no joined level to rebuild on a load. The point's
+  // cell's start brick starts ProbeQuery's walk (locateByWalk), which must end in a tet without leaving
+  // through a cut face. Thread-safe for concurrent const use (not during load or evict).
+  glm::vec3 irradiance(const glm::dvec3& world, const glm::vec3& normal) const;
+  bool answersFromLoaded(const glm::dvec3& world) const;
+
   // The buffers' bytes (the CPU mirror of the GPU buffers, sizes fixed by init).
   const PackedLevelBuffers& buffers() const { return buffers_; }
   // The byte spans written since the last call (merged, sorted by binding and offset), then forgotten.
@@ -129,6 +140,7 @@ class GpuSectorPool {
   void linkFaces(int32_t slot);
   void unlinkFaces(int32_t slot);
   bool insertCell(const SectorKey& key, int32_t brick);
+  bool locateLoaded(const glm::dvec3& world, Location& loc) const;
   void eraseCell(const SectorKey& key);
 
   StreamingLevel* level_ = nullptr;
@@ -154,6 +166,8 @@ class GpuSectorPool {
   std::unordered_map<uint32_t, int32_t> tetSlot_, probeSlot_;  // the file's index -> slot (resident only)
   std::unordered_map<FaceKey, int32_t, FaceHash> faces_;       // a resident tet's face -> 4 * slot + k
   std::vector<CellSlot> table_;                                // the cells' hash table (root = brick)
+  std::vector<int32_t> brickStarts_;                           // the bricks' start tets (slots), unpacked
+  std::unique_ptr<ProbeQuery> coarseQuery_;                    // on the level's coarse set
   std::map<SectorKey, int32_t> sectors_;                       // loaded sector -> its brick
   std::map<SectorKey, std::vector<uint32_t>> sectorTets_;      // loaded sector -> its tets (file indices)
   std::map<SectorKey, std::vector<uint32_t>> sectorProbes_;

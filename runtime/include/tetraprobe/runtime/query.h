@@ -167,4 +167,11 @@ class ProbeQuery {
   bool useOcclusion_ = true;
 };
 
+// Locates local point x (the level's frame, finite) by ProbeQuery's own walk from tet `start` (any tet of the
+// level), with no grid and no outer cells: true with the tet holding x and its weights, as
+// ProbeQuery::locate answers them inside the hull; false when the walk leaves through a face without a
+// neighbour or does not settle (a cycle off every tet, the step bound). For levels that are parts of a larger
+// one, whose cut faces have no neighbour (GpuSectorPool::irradiance).
+bool locateByWalk(const Level& level, const glm::dvec3& x, int32_t start, Location& out);
+
 }  // namespace tetraprobe
