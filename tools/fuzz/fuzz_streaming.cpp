@@ -4,9 +4,9 @@
 // (recomputeLevelChecksums, level_file.h: header, table, payload, the index's and each sector's), so the
 // mutations reach the table, the index, the sectors' records and validateLevel. Whatever opens has each
 // sector loaded (alone, then all together), queried at its centre and unloaded, and goes through the GPU
-// sector pool (loads and evictions). Any crash, sanitizer report, leak or hang is a bug; an error result is
-// the expected outcome. Built by `make fuzz` with clang (-fsanitize=fuzzer,address,undefined); seeds:
-// tools/fuzz/make_seeds.sh (streamed levels).
+// sector pool (loads, evictions and its CPU queries). Any crash, sanitizer report, leak or hang is a bug; an
+// error result is the expected outcome. Built by `make fuzz` with clang (-fsanitize=fuzzer,address,undefined);
+// seeds: tools/fuzz/make_seeds.sh (streamed levels).
 #include <unistd.h>
 
 #include <cstddef>
@@ -65,7 +65,15 @@ void openAndLoad(const std::vector<uint8_t>& bytes) {
     if (++tries > 64) break;
     if (pool.load(key) && tries % 2 == 0) pool.evict(key);
   }
-  sink = sink + float(pool.takeDirtyRanges().size() + pool.bytesInUse());
+  sink = sink + float(pool.takeDirtyRanges().size() + pool.bytesInUse()) +
+         pool.irradiance(forPool.coarse().origin + glm::dvec3(1.0, 2.0, 3.0), up).z;
+  for (const tetraprobe::SectorKey& key : forPool.sectors()) {  // a CPU query at each loaded cell's corner
+    if (!pool.isLoaded(key)) continue;
+    const tetraprobe::CellGrid& g = forPool.sectorGrid();
+    const glm::dvec3 corner =
+        forPool.origin() + glm::dvec3(g.min) + (glm::dvec3(key.x, key.y, key.z) + 0.25) * double(g.cellSize);
+    sink = sink + pool.irradiance(corner, up).x;
+  }
   (void)sink;
 }
 
