@@ -73,17 +73,6 @@ Layout layoutFor(const GpuPoolCapacity& cap, size_t coarseTets, size_t coarsePro
   return l;
 }
 
-// The coarse set's start grid and outer cells, as the full level's upload takes them from its ProbeQuery.
-struct CoarseParts {
-  StartGrid grid;
-  std::vector<OuterCell> outer;
-};
-
-CoarseParts coarseParts(const StreamingLevel& level) {
-  const ProbeQuery q(level.coarse(), level.sectorGrid().cellSize, 1);
-  return CoarseParts{q.startGrid(), q.outerCells()};
-}
-
 }  // namespace
 
 bool measureSectors(StreamingLevel& level, std::vector<GpuSectorSizes>& out, std::string* error) {
@@ -126,9 +115,10 @@ GpuPoolCapacity gpuPoolCapacityFor(const std::vector<GpuSectorSizes>& sizes, uin
 }
 
 size_t gpuPoolBytes(const StreamingLevel& level, const GpuPoolCapacity& capacity) {
-  const CoarseParts parts = coarseParts(level);
+  // The coarse set's start grid and outer cells, as the full level's upload takes them from its ProbeQuery.
+  const ProbeQuery& q = level.coarseQuery();
   const Layout l = layoutFor(capacity, level.coarse().tets.size(), level.coarse().probes.size(),
-                             parts.grid.startTet.size(), parts.outer.size(), level.hasOcclusion());
+                             q.startGrid().startTet.size(), q.outerCells().size(), level.hasOcclusion());
   return size_t(l.tetBytes + l.probeBytes + l.gridBytes + l.outerBytes + l.cellBytes + l.occBytes);
 }
 
@@ -137,10 +127,11 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
   *this = GpuSectorPool{};
   if (level.sectors().empty() || level.coarse().tets.empty()) return "streaming level not open";
   const Level& coarse = level.coarse();
-  const CoarseParts parts = coarseParts(level);
+  const StartGrid& coarseGrid = level.coarseQuery().startGrid();
+  const std::vector<OuterCell>& coarseOuter = level.coarseQuery().outerCells();
   occlusion_ = level.hasOcclusion();
-  const Layout l = layoutFor(capacity, coarse.tets.size(), coarse.probes.size(), parts.grid.startTet.size(),
-                             parts.outer.size(), occlusion_);
+  const Layout l = layoutFor(capacity, coarse.tets.size(), coarse.probes.size(), coarseGrid.startTet.size(),
+                             coarseOuter.size(), occlusion_);
   const uint64_t tets = coarse.tets.size() + uint64_t(capacity.tets);
   const uint64_t probes = coarse.probes.size() + uint64_t(capacity.probes);
   if (tets >= (uint64_t(1) << 31) || probes >= (uint64_t(1) << 31))
@@ -165,7 +156,7 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
 
   variant_.shOrder = coarse.shOrder == 1 ? 1u : 2u;
   variant_.planes = variant_.shadowMaps = occlusion_;
-  variant_.outerCells = !parts.outer.empty();
+  variant_.outerCells = !coarseOuter.empty();
   variant_.cellGrid = true;
   variant_.tetVertexBits = packing_.vertexBits;
   variant_.tetNeighbourBits = packing_.neighbourBits;
@@ -191,7 +182,6 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
     pool_.occlusion.planes.assign(size_t(capacity.planeTets) * 3, OcclusionPlane{});
     pool_.occlusion.shadowMaps.assign(size_t(capacity.shadowTets) * kShadowMapBlockBytes, kShadowMapNoHit);
   }
-  tetGlobal_.assign(size_t(tets), 0);
   probeGlobal_.assign(size_t(probes), 0);
   tetRefs_.assign(size_t(tets), 0);
   probeRefs_.assign(size_t(probes), 0);
@@ -212,22 +202,22 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
   put(b[kGpuBindingTets], 0, th);
   GpuGridHeader gh{};
   for (int a = 0; a < 3; ++a) {
-    gh.min[a] = parts.grid.min[a];
-    gh.cellSize[a] = parts.grid.cellSize[a];
-    gh.dims[a] = parts.grid.dims[a];
+    gh.min[a] = coarseGrid.min[a];
+    gh.cellSize[a] = coarseGrid.cellSize[a];
+    gh.dims[a] = coarseGrid.dims[a];
   }
   gh.tetCount = int32_t(tets);
   gh.probeCount = int32_t(probes);
   gh.maxWalkSteps = maxWalkSteps;
   put(b[kGpuBindingGrid], 0, gh);
-  std::memcpy(b[kGpuBindingGrid].data() + kGpuGridStartTetOffset, parts.grid.startTet.data(),
-              4 * parts.grid.startTet.size());
+  std::memcpy(b[kGpuBindingGrid].data() + kGpuGridStartTetOffset, coarseGrid.startTet.data(),
+              4 * coarseGrid.startTet.size());
   GpuOuterHeader oh{};
-  oh.count = int32_t(parts.outer.size());
+  oh.count = int32_t(coarseOuter.size());
   put(b[kGpuBindingOuterCells], 0, oh);
-  for (size_t k = 0; k < parts.outer.size(); ++k)
+  for (size_t k = 0; k < coarseOuter.size(); ++k)
     put(b[kGpuBindingOuterCells], kGpuOuterCellsOffset + sizeof(GpuOuterCell) * k,
-        gpuOuterCell(parts.outer[k]));
+        gpuOuterCell(coarseOuter[k]));
   GpuCellGridHeader ch{};
   for (int a = 0; a < 3; ++a) ch.min[a] = grid_.min[a];
   ch.cellSize = grid_.cellSize;
@@ -238,7 +228,6 @@ std::string GpuSectorPool::init(StreamingLevel& level, const GpuPoolCapacity& ca
   put(b[kGpuBindingCells], 0, ch);
   table_.assign(tableSlots_, CellSlot{{INT32_MIN, 0, 0}, 0});
   brickStarts_.assign(size_t(capacity.sectors) * kStartBrickDim * kStartBrickDim * kStartBrickDim, 0);
-  coarseQuery_ = std::make_unique<ProbeQuery>(coarse, grid_.cellSize, 1);
   for (size_t h = 0; h < tableSlots_; ++h) writeCellSlot(h);
   GpuOcclusionHeader och{};
   if (occlusion_) {
@@ -303,7 +292,7 @@ size_t GpuSectorPool::bytesInUse() const {
   // Headers, the coarse start grid and outer cells and the cells' hash table, then the slots in use.
   size_t n = buffers_.bytes[kGpuBindingGrid].size() + buffers_.bytes[kGpuBindingOuterCells].size() +
              tetRecords_ + size_t(cellBricks_) + size_t(occHeaders_);
-  const size_t tets = tetGlobal_.size() - freeTets_.size(), probes = probeGlobal_.size() - freeProbes_.size();
+  const size_t tets = pool_.tets.size() - freeTets_.size(), probes = pool_.probes.size() - freeProbes_.size();
   n += tets * (4 * packing_.strideUints + (occlusion_ ? 4 : 0));
   n += probes * 4 * (kGpuPositionFloatsPerProbe + kGpuShUintsPerProbe);
   n += (cap_.planeTets - freePlanes_.size()) * 4 * kPlaneBlockUints;
@@ -425,7 +414,7 @@ glm::vec3 GpuSectorPool::irradiance(const glm::dvec3& world, const glm::vec3& no
   Location loc;
   if (locateLoaded(world, loc))
     return shadeLocated(pool_, occlusion_ ? &pool_.occlusion : nullptr, loc, world, normal);
-  return coarseQuery_ ? coarseQuery_->irradiance(world, normal) : glm::vec3(0.0f);
+  return level_ ? level_->coarseQuery().irradiance(world, normal) : glm::vec3(0.0f);
 }
 
 GpuSectorPool::FaceKey GpuSectorPool::faceKey(int32_t slot, int k) const {
@@ -539,7 +528,6 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
       it->second = freeTets_.back();
       freeTets_.pop_back();
       const auto s = size_t(it->second);
-      tetGlobal_[s] = id;
       Tet t = r.tets[k];
       for (int32_t& v : t.v) v = probeSlot_.at(uint32_t(v));
       for (int32_t& n : t.n) n = -1;

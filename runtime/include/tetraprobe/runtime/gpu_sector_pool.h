@@ -31,7 +31,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
-#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -113,9 +112,9 @@ class GpuSectorPool {
   // resident tets, probes, occlusion and bricks, and the coarse set's part).
   size_t bytes() const;
   size_t bytesInUse() const;
-  uint32_t residentTets() const { return uint32_t(tetGlobal_.size() - freeTets_.size() - coarseTets_); }
+  uint32_t residentTets() const { return uint32_t(pool_.tets.size() - freeTets_.size() - coarseTets_); }
   uint32_t residentProbes() const {
-    return uint32_t(probeGlobal_.size() - freeProbes_.size() - coarseProbes_);
+    return uint32_t(pool_.probes.size() - freeProbes_.size() - coarseProbes_);
   }
 
  private:
@@ -159,15 +158,14 @@ class GpuSectorPool {
   // face-blend flags are computed by face_blend.h on it (plane slot p at planes [3p, 3p + 3), shadow slot s
   // at block s).
   Level pool_;
-  std::vector<uint32_t> tetGlobal_, probeGlobal_;  // slot -> the file's index (coarse slots: unused)
-  std::vector<uint32_t> tetRefs_, probeRefs_;      // loaded sectors holding the slot (0: free)
-  std::vector<int32_t> occSlot_;                   // tet slot -> its plane or shadow slot, or -1
+  std::vector<uint32_t> probeGlobal_;  // slot -> the file's probe index (coarse slots: unused; faces' keys)
+  std::vector<uint32_t> tetRefs_, probeRefs_;  // loaded sectors holding the slot (0: free)
+  std::vector<int32_t> occSlot_;               // tet slot -> its plane or shadow slot, or -1
   std::vector<int32_t> freeTets_, freeProbes_, freePlanes_, freeShadows_, freeBricks_;
   std::unordered_map<uint32_t, int32_t> tetSlot_, probeSlot_;  // the file's index -> slot (resident only)
   std::unordered_map<FaceKey, int32_t, FaceHash> faces_;       // a resident tet's face -> 4 * slot + k
   std::vector<CellSlot> table_;                                // the cells' hash table (root = brick)
   std::vector<int32_t> brickStarts_;                           // the bricks' start tets (slots), unpacked
-  std::unique_ptr<ProbeQuery> coarseQuery_;                    // on the level's coarse set
   std::map<SectorKey, int32_t> sectors_;                       // loaded sector -> its brick
   std::map<SectorKey, std::vector<uint32_t>> sectorTets_;      // loaded sector -> its tets (file indices)
   std::map<SectorKey, std::vector<uint32_t>> sectorProbes_;

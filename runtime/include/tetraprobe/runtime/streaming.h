@@ -107,6 +107,8 @@ class StreamingLevel {
   size_t bytesInUse() const;
 
   const Level& coarse() const { return coarse_; }
+  // The coarse set's query (valid while open): what query() answers with outside the loaded sectors.
+  const ProbeQuery& coarseQuery() const { return *coarseQuery_; }
   const Level& loadedLevel() const { return fine_; }
 
  private:
