@@ -202,13 +202,10 @@ int cmdRender(int argc, char** argv) {
             "tetraprobe_upsample.glsl)",
             ""},
            {"--stream-window", "", "N",
-            "irradiance/indirect/full, a level with a streaming index (tetraprobe stream): the lookup reads "
-            "a\n"
-            "GPU sector pool holding the N sectors nearest the view's target, as an engine streaming the "
-            "level\n"
-            "shows it (the coarse set elsewhere); prints how many pixels come from loaded sectors and that "
-            "they\n"
-            "equal the full level's (docs/streaming.md)",
+            "irradiance/indirect/full, a level with a streaming index (tetraprobe stream): the lookup reads\n"
+            "a GPU sector pool holding the N sectors nearest the view's target, as an engine streaming the\n"
+            "level shows it (the coarse set elsewhere); prints how many pixels come from loaded sectors and\n"
+            "that they equal the full level's (docs/streaming.md)",
             ""}}));
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(2, 2);

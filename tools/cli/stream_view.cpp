@@ -17,7 +17,6 @@ std::unique_ptr<StreamView> openStreamView(const std::string& path, size_t windo
   if (LevelResult r = v->level.open(path); !r)
     throw InputError(r.message +
                      " (--stream-window needs a level with a streaming index: tetraprobe stream)");
-  if (LevelResult r = v->cpu.open(path); !r) throw InputError(r.message);
   std::vector<GpuSectorSizes> sizes;
   std::string error;
   if (!measureSectors(v->level, sizes, &error)) throw InputError(error);
@@ -34,7 +33,6 @@ std::unique_ptr<StreamView> openStreamView(const std::string& path, size_t windo
   std::sort(byDistance.begin(), byDistance.end());
   for (size_t i = 0; i < v->window; ++i) {
     if (LevelResult r = v->pool.load(byDistance[i].second); !r) throw InputError(r.message);
-    if (LevelResult r = v->cpu.load(byDistance[i].second); !r) throw InputError(r.message);
   }
   return v;
 }
@@ -46,7 +44,7 @@ StreamViewPixels compareStreamView(const StreamView& view, const glm::dvec3& ori
   for (size_t i = 0; i + 3 < pos.size(); i += 4) {
     if (pos[i + 3] == 0.0f) continue;
     const glm::dvec3 p = origin + glm::dvec3(pos[i], pos[i + 1], pos[i + 2]);
-    if (!view.cpu.answersFromLoaded(p)) {
+    if (!view.pool.answersFromLoaded(p)) {
       ++n.coarse;
       continue;
     }

@@ -17,7 +17,6 @@ namespace tetraprobe::cli {
 
 struct StreamView {
   StreamingLevel level;  // the pool reads sectors through it
-  StreamingLevel cpu;    // the same sectors, for StreamingLevel::answersFromLoaded
   GpuSectorPool pool;
   size_t window = 0;
 };
