@@ -4,21 +4,25 @@
 //   Unity's GetInterpolatedProbe), with the tet cached from the previous frame, so each frame's walk starts
 //   next to where it ends; every surface normal is then shaded from that SH (shIrradiance);
 // - per pixel: the irradiance at each of the sphere's surface points with its own normal, in one
-//   irradianceBatch call (CPU; an engine would run the same lookup per pixel in a shader, tetraprobe.glsl).
+//   irradianceBatch call (CPU; the GPU side below runs the same lookup per pixel in a shader, tetraprobe.glsl).
 // It prints a line per frame: the per-object error against the per-pixel answer over the sphere, and at the
 // centre the largest relative difference between the SH's and irradiance()'s answer over the six axis
 // normals (0 without occlusion; with it the SH sees the probes from the centre, irradiance() from a surface).
 // Then the GPU side (gpu_level.cpp, skipped without a Vulkan device): the level's six storage buffers
 // uploaded to device-local memory through a staging copy recorded into the engine's command buffer, the
-// buffers the engine owns printed, and part of the level relit in place (setProbeSh + cmdUpdateLevelSh).
-// Left out: rendering (no window, no shader reading the buffers).
+// buffers the engine owns printed, the last frame's sphere shaded per pixel by the engine's own compute pass
+// including tetraprobe.glsl (surface_lighting.h; against the CPU's answers), and part of the level relit in
+// place (setProbeSh + cmdUpdateLevelSh) and shaded again.
+// Left out: a window and meshes (the sphere's surface points stand in for a G-buffer).
 // Checks its own results (exit 1 on failure): the cached walk answers as an uncached locate, every value is
 // finite, the sphere is darker in the room the lamp does not see (two_rooms: x > 4.2) than in the lit one,
-// and the GPU's probe buffer after the relight equals the packing of the relit level byte for byte.
+// the GPU's pixels equal the CPU's within 1e-4 relative before and after the relight, and the GPU's probe
+// buffer after the relight equals the packing of the relit level byte for byte.
 //
 // With --stream (a level with a streaming index, `tetraprobe stream`): the GPU side only, streamed by sector
 // (gpu_streaming.cpp): a camera's loop over the level with a fixed-size GPU pool within BUDGET (a share of
-// the full level's GPU bytes, default 0.25), a line per frame.
+// the full level's GPU bytes, default 0.25), a line per frame, each frame's view shaded from the pool by the
+// same lighting pass and checked against the whole level where sectors are loaded.
 //
 // Usage: engine_integration LEVEL.tpb [FROM_X,Y,Z TO_X,Y,Z]  (default path: the two_rooms sample's rooms)
 //        engine_integration LEVEL.tpb --stream [BUDGET [FRAMES]]
@@ -129,8 +133,8 @@ int main(int argc, char** argv) {
         f, centre.x, centre.y, centre.z, cachedTet, luminance(tetraprobe::shIrradiance(sh, axes[2])),
         meanPixel, meanPixel > 0 ? 100.0 * meanError / meanPixel : 0.0, centreDiff);
   }
-  if (argc == 2) ok = ok && lastRoom < firstRoom;  // the default path ends in the unlit room
-  ok = runGpuLevel(level, query) && ok;            // relights `level`: after the CPU frames
+  if (argc == 2) ok = ok && lastRoom < firstRoom;         // the default path ends in the unlit room
+  ok = runGpuLevel(level, query, points, normals) && ok;  // relights `level`: after the CPU frames
   std::printf("%s\n", ok ? "ok" : "FAILED");
   return ok ? 0 : 1;
 }
