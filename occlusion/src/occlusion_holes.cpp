@@ -20,6 +20,7 @@
 #include "tetraprobe/occlusion/build_occlusion.h"
 #include "tetraprobe/runtime/query.h"
 #include "tetraprobe/runtime/shade.h"
+#include "tetraprobe/scene/scene.h"
 
 namespace tetraprobe {
 
@@ -60,15 +61,6 @@ class NearGrid {
   double r_;
   std::unordered_map<glm::i64vec3, std::vector<glm::dvec3>, CellHash> cells_;
 };
-
-double surfaceArea(const Scene& scene) {
-  double area = 0.0;
-  for (const glm::uvec3& t : scene.triangles) {
-    const glm::dvec3 a(scene.positions[t.x]), b(scene.positions[t.y]), c(scene.positions[t.z]);
-    area += 0.5 * glm::length(glm::cross(b - a, c - a));
-  }
-  return area;
-}
 
 }  // namespace
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 namespace tetraprobe {
 
@@ -18,6 +19,15 @@ void sceneBounds(const Scene& scene, glm::vec3& lo, glm::vec3& hi) {
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
+}
+
+double surfaceArea(const Scene& scene) {
+  double area = 0.0;
+  for (const glm::uvec3& t : scene.triangles) {
+    const glm::dvec3 a(scene.positions[t.x]), b(scene.positions[t.y]), c(scene.positions[t.z]);
+    area += 0.5 * glm::length(glm::cross(b - a, c - a));
+  }
+  return area;
 }
 
 namespace {

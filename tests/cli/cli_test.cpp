@@ -606,10 +606,12 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
   EXPECT_EQ(ij.at("tets").at("count"), j.at("tets").at("count"));
 }
 
-// Refinement's surface points grow with its probe budget (--refine-points auto): at least 2048, the budget
-// where that is more, so a level with sixteen times the budget selects from sixteen times the points; a
-// number given is used as is. The report and the generator string say which.
-TEST_F(Cli, RefinePointsGrowWithTheProbeBudget) {
+// Refinement's surface points grow with its probe budget and with the level's surface (--refine-points auto,
+// autoRefinePoints): at least 2048, the budget where that is more, one point per spacing x spacing of surface
+// where that is more still, so every part of a larger level is traced as densely as a room; a number given is
+// used as is. The report and the generator string say which. The box's surface is 81 m^2 (walls, floor and
+// ceiling 80, the light 1); scaled 6x it is 2,916 m^2, so 2,916 points at 1 m.
+TEST_F(Cli, RefinePointsGrowWithTheProbeBudgetAndTheSurface) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
   const std::string base = "bake " + path("box.obj").string() +
@@ -632,6 +634,18 @@ TEST_F(Cli, RefinePointsGrowWithTheProbeBudget) {
   const CliRun insp = run("inspect " + path("r.tpb").string());
   EXPECT_NE(insp.out.find("--refine-points=300"), std::string::npos) << insp.out;
   EXPECT_EQ(run(base + " --refine-points 0 -o " + path("z.tpb").string()).code, 2);
+  EXPECT_NEAR(nlohmann::json::parse(slurp(path("r.json"))).at("scene").at("surface_area_m2").get<double>(),
+              81.0, 1e-9);
+
+  write("big.scene.json", R"({"mesh": "box.obj", "unit_scale": 6})");
+  const CliRun big = run("bake " + path("big.scene.json").string() +
+                         " --samples 16 --spacing 1 --max-samples 16 --path-budget 100000 --fill-holes 0"
+                         " --probe-budget 16 -o " +
+                         path("big.tpb").string() + " --report " + path("big.json").string());
+  ASSERT_EQ(big.code, 0) << big.err;
+  const auto j = nlohmann::json::parse(slurp(path("big.json")));
+  EXPECT_NEAR(j.at("scene").at("surface_area_m2").get<double>(), 36.0 * 81.0, 1e-6);
+  EXPECT_EQ(j.at("refine").at("points").get<int>(), 2916);
 }
 
 // Query: below a ceiling light, a surface facing up (toward the light) receives much more than one facing

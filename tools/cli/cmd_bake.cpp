@@ -303,6 +303,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                   {"materials", scene.materials.size()},
                   {"lights", scene.lights.size()},
                   {"bounds", {{sceneLo.x, sceneLo.y, sceneLo.z}, {sceneHi.x, sceneHi.y, sceneHi.z}}},
+                  {"surface_area_m2", surfaceArea(scene)},
                   {"warnings", scene.warnings}};
     j["level"] = out;
     const nlohmann::json refinePoints =

@@ -21,6 +21,7 @@
 #include "tetraprobe/runtime/luminance.h"
 #include "tetraprobe/runtime/outer_cells.h"
 #include "tetraprobe/runtime/sh_half.h"
+#include "tetraprobe/scene/scene.h"
 #include "tetraprobe/tetra/filler.h"
 #include "tetraprobe/tetra/final_slivers.h"
 #include "tetraprobe/tetra/placement.h"
@@ -588,7 +589,6 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   // auto: a quarter of the placed probes (shell probes not counted), at least kAutoRefineMin: a small level's
   // rooms hold few probes at the default spacing, and that is where 1 m probes resolve the light worst.
   constexpr int kAutoRefineMin = 256;
-  constexpr int kAutoRefinePointsMin = 2048;
   const int budget = options.probeBudget >= 0
                          ? options.probeBudget
                          : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));
@@ -598,7 +598,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   if (budget > 0 && baked) {
     RefineOptions ro;
     ro.spacing = options.spacing;
-    ro.points = options.refinePoints > 0 ? options.refinePoints : std::max(kAutoRefinePointsMin, budget);
+    ro.points = options.refinePoints > 0
+                    ? options.refinePoints
+                    : autoRefinePoints(budget, surfaceArea(tracer.scene()), options.spacing);
     ro.content = options.bake.content;
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;

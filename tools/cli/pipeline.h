@@ -2,7 +2,9 @@
 // `tetraprobe bake` and the end-to-end tests.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -74,9 +76,7 @@ struct PipelineOptions {
   // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone
   // (placement "none") the CLI makes it 0 unless given (pipeline_options.h).
   int probeBudget = -1;
-  // Surface points refinement measures at (each twice: select, check); < 0 = auto: the probe budget, at
-  // least kAutoRefinePointsMin, so that the points grow with the level as its budget does (a level 16 times
-  // the size selects its 16 times the probes from 16 times the points, as a room does).
+  // Surface points refinement measures at (each twice: select, check); < 0 = auto (autoRefinePoints).
   int refinePoints = -1;
   // The late sliver pass (tetra/final_slivers.h) after hole and refinement probes: brings the worst tet of the
   // final mesh back to the worst before those probes (or lateMinDihedral when lower), with at most lateFillers filler probes (baked like the
@@ -175,6 +175,21 @@ struct PipelineStats {
 // The SH fit's automatic point count (PipelineOptions::fitPoints < 0).
 inline constexpr int kFitPointsPerProbe = 6;
 inline constexpr int kFitPointsMin = 2048;
+
+// Refinement's automatic point count (--refine-points auto): the largest of kAutoRefinePointsMin, the probe
+// budget and kRefinePointsPerCell points per spacing x spacing of surface (area in m^2). Refinement adds
+// about 0.085 probes a traced point at every level size (docs/scaling.md), so what it gains on a part of a
+// level follows the points traced there: with a count proportional to the surface every part of a large level
+// is traced as densely as a small level of the same kind (one point per probe-spacing square of surface), and
+// the minimum keeps a small room's estimate from resting on a few hundred points.
+inline constexpr int kAutoRefinePointsMin = 2048;
+inline constexpr double kRefinePointsPerCell = 1.0;
+inline int autoRefinePoints(int budget, double surfaceArea, double spacing) {
+  const double byArea = kRefinePointsPerCell * surfaceArea / (spacing * spacing);
+  // Clamped below INT_MAX / 4: the point sets are int-sized.
+  const double points = std::min(std::max({double(kAutoRefinePointsMin), double(budget), byArea}), 5.0e8);
+  return int(std::llround(points));
+}
 inline constexpr int kFitPointsMax = 16384;
 
 // The default finest probe spacing for `scene` (bake --spacing auto): 1 m, the scale of gameplay space, or

@@ -125,8 +125,9 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "alone)",
        def("--probe-budget")},
       {"--refine-points", "", "N|auto",
-       "refinement: surface points the error is measured at (twice: select, check); auto = the probe "
-       "budget, at least 2048, so that a larger level is measured at as many points a probe as a room",
+       "refinement: surface points the error is measured at (twice: select, check); auto = one per "
+       "spacing x spacing of surface, at least 2048 and at least the probe budget, so that every part of a "
+       "larger level is measured as densely as a room",
        def("--refine-points")},
       {"--refine-offset", "", "auto|METRES",
        "refinement: how far in front of its surface point a new probe sits at most (half the free "

@@ -114,4 +114,7 @@ std::string transparencyProblem(const Scene& scene);
 // Bounds of all vertex positions.
 void sceneBounds(const Scene& scene, glm::vec3& lo, glm::vec3& hi);
 
+// Total area of the triangles, m^2 (each side counted once), summed in double in triangle order.
+double surfaceArea(const Scene& scene);
+
 }  // namespace tetraprobe
