@@ -95,14 +95,8 @@ struct Engine {
   }
 };
 
-// A buffer's bytes, copied on the GPU into a host-visible buffer (the level's buffers are not mappable on a
-// discrete GPU).
-inline bool readBuffer(Engine& e, VkBuffer source, VkDeviceSize size, std::vector<char>& out) {
-  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-  bci.size = size;
-  bci.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-  VkBuffer buffer = VK_NULL_HANDLE;
-  if (vkCreateBuffer(e.device, &bci, nullptr, &buffer) != VK_SUCCESS) return false;
+// The allocation for `buffer` in a host-visible, coherent memory type (memoryTypeIndex UINT32_MAX: none).
+inline VkMemoryAllocateInfo hostAllocation(const Engine& e, VkBuffer buffer) {
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(e.device, buffer, &req);
   VkPhysicalDeviceMemoryProperties mem;
@@ -115,6 +109,18 @@ inline bool readBuffer(Engine& e, VkBuffer source, VkDeviceSize size, std::vecto
   for (uint32_t i = 0; i < mem.memoryTypeCount && alloc.memoryTypeIndex == UINT32_MAX; ++i)
     if ((req.memoryTypeBits & (1u << i)) && (mem.memoryTypes[i].propertyFlags & host) == host)
       alloc.memoryTypeIndex = i;
+  return alloc;
+}
+
+// A buffer's bytes, copied on the GPU into a host-visible buffer (the level's buffers are not mappable on a
+// discrete GPU).
+inline bool readBuffer(Engine& e, VkBuffer source, VkDeviceSize size, std::vector<char>& out) {
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = size;
+  bci.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  if (vkCreateBuffer(e.device, &bci, nullptr, &buffer) != VK_SUCCESS) return false;
+  const VkMemoryAllocateInfo alloc = hostAllocation(e, buffer);
   VkDeviceMemory memory = VK_NULL_HANDLE;
   void* mapped = nullptr;
   bool ok = alloc.memoryTypeIndex != UINT32_MAX &&

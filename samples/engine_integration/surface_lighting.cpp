@@ -38,18 +38,7 @@ bool SurfaceLighting::makeBuffer(VkDeviceSize size, Buffer& out) {
   bci.size = size;
   bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   if (vkCreateBuffer(e_->device, &bci, nullptr, &out.buffer) != VK_SUCCESS) return false;
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(e_->device, out.buffer, &req);
-  VkPhysicalDeviceMemoryProperties mem;
-  vkGetPhysicalDeviceMemoryProperties(e_->physical, &mem);
-  const VkMemoryPropertyFlags host =
-      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = UINT32_MAX;
-  for (uint32_t i = 0; i < mem.memoryTypeCount && alloc.memoryTypeIndex == UINT32_MAX; ++i)
-    if ((req.memoryTypeBits & (1u << i)) && (mem.memoryTypes[i].propertyFlags & host) == host)
-      alloc.memoryTypeIndex = i;
+  const VkMemoryAllocateInfo alloc = hostAllocation(*e_, out.buffer);
   return alloc.memoryTypeIndex != UINT32_MAX &&
          vkAllocateMemory(e_->device, &alloc, nullptr, &out.memory) == VK_SUCCESS &&
          vkBindBufferMemory(e_->device, out.buffer, out.memory, 0) == VK_SUCCESS &&
