@@ -113,24 +113,24 @@ bool runGpuStreaming(const std::string& path, double budgetShare, int frames) {
     std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
     return false;
   }
-  // The budget's base: what the whole level takes on the GPU (a tool computes this once, offline).
-  // The whole level is also the lighting check's reference (below).
-  size_t fullBytes = 0;
+  // The budget's base: what the whole level takes on the GPU (a tool computes this once, offline). The same
+  // packing is uploaded as the lighting check's reference (below).
   Level full;
   if (LevelResult r = loadLevel(path, full); !r) {
     std::fprintf(stderr, "engine_integration: %s\n", r.message.c_str());
     return false;
   }
   const ProbeQuery fullQuery(full);
+  PackedLevelBuffers fullPacked;
+  size_t fullBytes = 0;
   {
-    PackedLevelBuffers packed;
     std::string error;
-    if (!packLevelBuffers(full, fullQuery.startGrid(), fullQuery.outerCells(), fullQuery.cellGrid(), packed,
-                          &error)) {
+    if (!packLevelBuffers(full, fullQuery.startGrid(), fullQuery.outerCells(), fullQuery.cellGrid(),
+                          fullPacked, &error)) {
       std::fprintf(stderr, "engine_integration: %s\n", error.c_str());
       return false;
     }
-    for (const std::vector<char>& b : packed.bytes) fullBytes += b.size();
+    for (const std::vector<char>& b : fullPacked.bytes) fullBytes += b.size();
   }
   const auto budget = size_t(budgetShare * double(fullBytes));
   std::vector<GpuSectorSizes> sizes;
@@ -187,9 +187,8 @@ bool runGpuStreaming(const std::string& path, double budgetShare, int frames) {
   // The reference: the whole level uploaded as an engine without streaming would, shaded by the same pass.
   VulkanLevelBuffers fullBuffers;
   ok = e.frame([&](VkCommandBuffer cmd) {
-    return cmdUploadLevelBuffers(e.physical, e.device, cmd, full, fullQuery.startGrid(),
-                                 fullQuery.outerCells(), fullQuery.cellGrid(), readers, fullBuffers, staging,
-                                 &error) == VK_SUCCESS;
+    return cmdUploadPackedLevelBuffers(e.physical, e.device, cmd, fullPacked, readers, fullBuffers, staging,
+                                       &error) == VK_SUCCESS;
   });
   destroyStagingBuffer(e.device, staging);
   SurfaceLighting lighting;

@@ -11,10 +11,16 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, set = 1, binding = 0) readonly buffer SurfacePoints { vec4 points[]; };
-layout(std430, set = 1, binding = 1) writeonly buffer SurfaceIrradiance { vec4 irradiance[]; };
+layout(std430, set = 1, binding = 0) readonly buffer SurfacePoints {
+  vec4 points[];
+};
+layout(std430, set = 1, binding = 1) writeonly buffer SurfaceIrradiance {
+  vec4 irradiance[];
+};
 
-layout(push_constant) uniform Push { uint count; };
+layout(push_constant) uniform Push {
+  uint count;
+};
 
 void main() {
   uint i = gl_GlobalInvocationID.x;
