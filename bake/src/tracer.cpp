@@ -170,7 +170,13 @@ SceneTracer::SceneTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   // makes the BVH (so every hit) a function of the scene alone; tracing still runs on the caller's threads.
   // Cost: within noise (`bench bake` on Sponza, 66k triangles, load + BVH + 2 probes: 0.67-0.68 s before,
   // 0.68-0.77 s after, 2 shared cores). tests/cli/test_thread_determinism.cpp pins the result.
-  impl_->device = rtcNewDevice("threads=1");
+  // The kernels are capped at AVX2: Embree picks its widest ISA at run time, and its kernels differ in the
+  // last bits of a hit (an approximate reciprocal refined differently per ISA, the BVH's node width), so the
+  // same scene baked with SSE4.2 and AVX2 kernels gives different level bytes (two_rooms' visual bake:
+  // measured), and an AVX-512 machine would differ from an AVX2 one. Capped, every AVX2 and AVX-512 machine
+  // bakes the same bytes (CI, the visual references and a studio's farm agree); a CPU without AVX2 still
+  // bakes, with its own last bits.
+  impl_->device = rtcNewDevice("threads=1,max_isa=avx2");
   if (!impl_->device) throw std::runtime_error("Embree: rtcNewDevice failed");
   rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
   impl_->rtcScene = rtcNewScene(impl_->device);
