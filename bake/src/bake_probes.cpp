@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -17,6 +18,7 @@
 
 #include "path_tracer.h"
 #include "probe_bake.h"
+#include "probe_guide.h"
 #include "ray_tap.h"
 #include "rng.h"
 #include "sampling.h"
@@ -47,7 +49,8 @@ glm::vec3 sphereDirection(const glm::dmat3& rotation, int k, int n) {
 // The unrotated n-point set, cached per thread (the same doubles sphericalFibonacci gives: saves a double
 // sincos per path).
 const std::vector<glm::dvec3>& fibonacciSet(int n) {
-  thread_local std::vector<glm::dvec3> set;
+  thread_local std::vector<glm::dvec3> sets[3];  // a batch, a guided batch's uniform half, a pilot
+  std::vector<glm::dvec3>& set = sets[n == kBakeBatchSize ? 0 : n == kBakeBatchSize / 2 ? 1 : 2];
   if (set.size() != size_t(n)) {
     set.resize(size_t(n));
     for (int k = 0; k < n; ++k) set[size_t(k)] = sphericalFibonacci(k, n);
@@ -96,15 +99,17 @@ bool samplesEmitters(const SceneTracer& tracer, const BakeOptions& options) {
 // + k)), shadow-tested from the probe and MIS-weighted, added to acc in the units of the sphere sum (L Y /
 // (4 pi p)): the caller's 4 pi / count scale then gives their share of the projection.
 void addEmitterSamples(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
-                       const BakeOptions& options, uint64_t first, int count, double acc[kShCoeffCount][3]) {
+                       const BakeOptions& options, uint64_t first, int count, double acc[kShCoeffCount][3],
+                       const std::function<float(const glm::vec3&)>& spherePdf = {}) {
   for (int k = 0; k < count; ++k) {
     Rng rng(streamKey(options.seed, index, kEmitterSampleTag | (first + uint64_t(k))));
     EmitterSample e;
     if (!sampleEmitter(tracer, probe, rng, e)) continue;
     const float through = emitterTransmittance(tracer, probe, e);
     if (through <= 0.0f) continue;
+    const float sphere = spherePdf ? spherePdf(e.dir) : kSpherePdf;
     const double weight =
-        double(through) * powerHeuristic(e.pdf, kSpherePdf) / (double(e.pdf) * 4.0 * std::numbers::pi);
+        double(through) * powerHeuristic(e.pdf, sphere) / (double(e.pdf) * 4.0 * std::numbers::pi);
     const auto y = shBasis<double>(e.dir.x, e.dir.y, e.dir.z);
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) acc[i][c] += double(e.radiance[c]) * weight * y[size_t(i)];
@@ -132,23 +137,100 @@ void axisLuminance(const double sh[kShCoeffCount][3], double out[6]) {
   }
 }
 
+constexpr uint64_t kGuidePilotTag = 1ull << 60;
+constexpr uint64_t kGuideRotationTag = kGuidePilotTag | (1ull << 58);
+constexpr uint64_t kGuideDirectionTag = kGuidePilotTag | (1ull << 59);
+
+// A probe's guide (probe_guide.h), built lazily before its first guided batch. Rebuilt, not stored, by each
+// pass that adds batches (a pure function of the seed and the probe), so shards and the merge need no state.
+struct GuideSlot {
+  bool built = false;
+  ProbeGuide guide;
+};
+
+// The pilot: kGuidePilotPaths paths over a rotated spherical Fibonacci set, their own streams, with the light
+// the probe's paths carry except emission met directly (the emitters are sampled apart, and a lamp seen
+// directly would draw the guide away from the lit surfaces it should find).
+ProbeGuide buildGuide(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
+                      const BakeOptions& options, const AdaptiveProbe& st) {
+  const TraceSettings settings{std::min(options.bounces, 1), options.content & ~uint32_t(kContentEmissive)};
+  const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kGuideRotationTag));
+  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(kGuidePilotPaths);
+  std::vector<glm::vec3> dirs(kGuidePilotPaths);
+  std::vector<float> lum(kGuidePilotPaths);
+  for (int k = 0; k < kGuidePilotPaths; ++k) {
+    dirs[size_t(k)] = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
+    Rng rng(streamKey(options.seed, index, kGuidePilotTag | uint64_t(k + 1)));
+    lum[size_t(k)] =
+        float(luminance(glm::dvec3(incidentRadiance(tracer, probe, dirs[size_t(k)], 0.0f, settings, rng))));
+  }
+  // Guide only where the light the pilot sees (one bounce) is most of what the probe's paths so far found
+  // (their mean radiance over the sphere, L00 Y00): elsewhere the light comes after more bounces, from
+  // anywhere, and directions drawn toward the first bounce's light would only thin the uniform half.
+  double pilotMean = 0.0;
+  for (float l : lum) pilotMean += std::isfinite(l) && l > 0.0f ? double(l) / kGuidePilotPaths : 0.0;
+  const double y00 = shBasis<double>(0.0, 0.0, 1.0)[0];
+  const double pathsMean =
+      luminance(glm::dvec3(st.acc[0][0], st.acc[0][1], st.acc[0][2])) * y00 / std::max(st.batches, 1);
+  if (!(pilotMean >= kGuideMinOneBounceShare * pathsMean)) return ProbeGuide();
+  return ProbeGuide(dirs, lum);
+}
+
+// Whether batch b of a probe is guided: adaptive sampling asked for it and the first samplesPerProbe paths
+// (pass 1, which every probe takes) are done.
+bool guidedBatch(const BakeOptions& options, int b) {
+  const int minBatches = std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
+  return options.guide && options.targetRelError > 0.0 && b >= minBatches;
+}
+
 void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options,
-              AdaptiveProbe& st) {
+              AdaptiveProbe& st, GuideSlot* slot = nullptr) {
   const TraceSettings settings{options.bounces, options.content};
   const uint64_t b = uint64_t(st.batches);
   const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kBatchRotationTag | b));
-  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(kBakeBatchSize);
   const bool emitters = samplesEmitters(tracer, options);
+  const ProbeGuide* guide = nullptr;
+  if (slot && guidedBatch(options, st.batches)) {
+    if (!slot->built) {
+      slot->guide = buildGuide(tracer, probe, index, options, st);
+      slot->built = true;
+    }
+    if (slot->guide.active()) guide = &slot->guide;
+  }
+  // Unguided: kBakeBatchSize uniform directions, density 1 / (4 pi). Guided: half uniform, half from the
+  // guide; every direction weighted by the mixture's density (n_u / 4 pi + n_g p_g) / n, which also
+  // stands for the sphere in the emitter samples' MIS.
+  const int uniformCount = guide ? kBakeBatchSize / 2 : kBakeBatchSize;
+  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(uniformCount);
+  const auto mixturePdf = [&](const glm::vec3& d) {
+    return guide ? 0.5f * kSpherePdf + 0.5f * guide->pdf(d) : kSpherePdf;
+  };
   double acc[kShCoeffCount][3] = {};
   for (int k = 0; k < kBakeBatchSize; ++k) {
-    const glm::vec3 d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
+    glm::vec3 d;
+    if (k < uniformCount) {
+      d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
+    } else {
+      Rng pick(streamKey(options.seed, index, kGuideDirectionTag | (b * kBakeBatchSize + uint64_t(k))));
+      // Stratified over the guide's cumulative distribution: guided direction j of the batch in the j-th of
+      // equal slices of it (each still drawn with density n_g p_g in its slice, so the sum is unbiased), as
+      // the uniform half is stratified by its Fibonacci set.
+      const double u1 =
+          (double(k - uniformCount) + pick.uniformDouble()) / double(kBakeBatchSize - uniformCount);
+      const double u2 = pick.uniformDouble(), u3 = pick.uniformDouble();
+      d = guide->sample(u1, u2, u3);
+    }
+    const float pdf = mixturePdf(d);
     Rng rng(streamKey(options.seed, index, b * kBakeBatchSize + uint64_t(k) + 1));
-    const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? kSpherePdf : 0.0f, settings, rng);
+    const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, settings, rng);
     const auto y = shBasis<double>(d.x, d.y, d.z);
+    const double w = guide ? double(kSpherePdf) / double(pdf) : 1.0;  // in units of a uniform sample
     for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * y[size_t(i)];
+      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * w * y[size_t(i)];
   }
-  if (emitters) addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc);
+  if (emitters)
+    addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc,
+                      guide ? mixturePdf : std::function<float(const glm::vec3&)>());
   const double scale = 4.0 * std::numbers::pi / kBakeBatchSize;
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -434,8 +516,9 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         run(i, [&] {
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
+          GuideSlot guide;
           while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, st);
+            addBatch(tracer, glm::vec3(probes[i]), i, options, st, &guide);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;
@@ -485,8 +568,9 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
           const int stop = int(std::min<uint64_t>(uint64_t(ceilingBatches), uint64_t(st.batches) + share));
+          GuideSlot guide;
           while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, st);
+            addBatch(tracer, glm::vec3(probes[i]), i, options, st, &guide);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;

@@ -245,26 +245,31 @@ TEST_F(Cli, BadInputExitsTwoAndLeavesNoOutput) {
 
 // A sharded bake (bake --shard I/N, merge) gives the one-process bake's level byte for byte, here with two
 // shards run one after the other (tools/distributed/run_local.sh runs three at once on the sample level,
-// with refinement; here one hole round and no refinement keep it to seconds).
+// with refinement; here one hole round and no refinement keep it to seconds). With probe guiding too: its
+// guides are rebuilt from the seed wherever batches are added (a shard's pass 2, the merge's path budget).
 TEST_F(Cli, MergedShardsEqualOneProcessBake) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
-  const std::string base =
-      "bake " + path("box.obj").string() +
-      " --samples 32 --max-samples 256 --path-budget 100000 --spacing 0.75 --threads 2 --fill-holes 1 "
-      "--probe-budget 0";
-  for (int i = 0; i < 2; ++i) {
-    const CliRun r = run(base + " --shard " + std::to_string(i) + "/2 -o " +
-                         path("s" + std::to_string(i) + ".part").string());
-    ASSERT_EQ(r.code, 0) << r.err;
+  for (const std::string guide : {"off", "on"}) {
+    SCOPED_TRACE("--guide " + guide);
+    const std::string base =
+        "bake " + path("box.obj").string() +
+        " --samples 32 --max-samples 256 --path-budget 100000 --spacing 0.75 --threads 2 --fill-holes 1 "
+        "--probe-budget 0 --guide " +
+        guide;
+    for (int i = 0; i < 2; ++i) {
+      const CliRun r = run(base + " --shard " + std::to_string(i) + "/2 -o " +
+                           path("s" + std::to_string(i) + ".part").string());
+      ASSERT_EQ(r.code, 0) << r.err;
+    }
+    const CliRun m = run("merge " + path("s1.part").string() + " " + path("s0.part").string() + " -o " +
+                         path("merged.tpb").string());
+    ASSERT_EQ(m.code, 0) << m.err;
+    ASSERT_EQ(run(base + " -o " + path("one.tpb").string()).code, 0);
+    const std::string a = slurp(path("merged.tpb")), b = slurp(path("one.tpb"));
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << "merged level differs from the one-process bake";
   }
-  const CliRun m = run("merge " + path("s1.part").string() + " " + path("s0.part").string() + " -o " +
-                       path("merged.tpb").string());
-  ASSERT_EQ(m.code, 0) << m.err;
-  ASSERT_EQ(run(base + " -o " + path("one.tpb").string()).code, 0);
-  const std::string a = slurp(path("merged.tpb")), b = slurp(path("one.tpb"));
-  ASSERT_FALSE(a.empty());
-  EXPECT_TRUE(a == b) << "merged level differs from the one-process bake";
 }
 
 // The two-round protocol (bake --round 1, merge --floor, bake --round 2, merge), in which no shard traces

@@ -81,6 +81,11 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "is at most E x its mean (0 = exactly --samples paths)",
        def("--noise")},
       {"--max-samples", "", "N", "adaptive sampling: paths per probe at most", def("--max-samples")},
+      {"--guide", "", "on|off",
+       "adaptive sampling: a probe still above --noise after --samples paths traces a 256-path pilot and "
+       "draws half of its later directions toward where the pilot found light (unbiased; "
+       "docs/accuracy.md has the figures)",
+       def("--guide")},
       {"--path-budget", "", "N",
        "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "
        "and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), so a small "
@@ -231,6 +236,9 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
   if (opt.bake.samplesPerProbe < 1) throw UsageError("--samples must be at least 1");
   opt.bake.targetRelError = args.number("--noise");
   opt.bake.maxSamplesPerProbe = args.integer("--max-samples");
+  if (args.str("--guide") != "on" && args.str("--guide") != "off")
+    throw UsageError("--guide must be on or off, not '" + args.str("--guide") + "'");
+  opt.bake.guide = args.str("--guide") == "on";
   const double pathBudget = args.number("--path-budget");
   if (!(pathBudget >= 0.0 && pathBudget <= 1e15))
     throw UsageError("--path-budget must be a number of paths in [0, 1e15]");
@@ -317,6 +325,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--samples", std::to_string(o.bake.samplesPerProbe));
   add("--noise", exactNumber(o.bake.targetRelError));
   add("--max-samples", std::to_string(o.bake.maxSamplesPerProbe));
+  add("--guide", o.bake.guide ? "on" : "off");
   add("--path-budget", std::to_string(o.bake.pathBudget));
   if (o.bake.content != kContentDefault && o.bake.content != kContentAll)
     throw std::logic_error("levelOptions: content flags " + std::to_string(o.bake.content) +

@@ -38,6 +38,11 @@ struct BakeOptions {
   // kBakeBudgetCapFactor x maxSamplesPerProbe paths), so a small level whose light arrives through a gap
   // converges instead of stopping at the cap. The shares depend only on path counts, never on threads.
   uint64_t pathBudget = 0;
+  // Adaptive sampling: after the first samplesPerProbe paths, a probe still above its target traces a pilot of
+  // 256 one-bounce paths; where the light it finds is concentrated and at least half the probe's light so far,
+  // each later batch draws half its directions from where the pilot found light (bake/src/probe_guide.h;
+  // unbiased: every direction weighted by the mixture's density). false: every batch uniform.
+  bool guide = true;
   int threads = 0;                      // 0 = all cores; never changes the result
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
