@@ -137,47 +137,21 @@ void axisLuminance(const double sh[kShCoeffCount][3], double out[6]) {
   }
 }
 
-constexpr uint64_t kGuidePilotTag = 1ull << 60;
-constexpr uint64_t kGuideRotationTag = kGuidePilotTag | (1ull << 58);
-constexpr uint64_t kGuideDirectionTag = kGuidePilotTag | (1ull << 59);
+constexpr uint64_t kGuideDirectionTag = 1ull << 60;
 
-// A probe's guide (probe_guide.h), built lazily before its first guided batch. Rebuilt, not stored, by each
-// pass that adds batches (a pure function of the seed and the probe), so shards and the merge need no state.
+// A probe's guide while one pass adds its batches (probe_guide.h): the histogram of this pass's paths and the
+// guide last built from it. Kept only for that loop, so a later pass (the path budget's rounds, or the merge
+// of a sharded bake) learns again from its own batches: the same result wherever it runs, and no state for
+// shards to carry.
 struct GuideSlot {
-  bool built = false;
+  GuideHistogram histogram;
   ProbeGuide guide;
+  int batches = 0;  // batches recorded in `histogram`
 };
 
-// The pilot: kGuidePilotPaths paths over a rotated spherical Fibonacci set, their own streams, with the light
-// the probe's paths carry except emission met directly (the emitters are sampled apart, and a lamp seen
-// directly would draw the guide away from the lit surfaces it should find).
-ProbeGuide buildGuide(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
-                      const BakeOptions& options, const AdaptiveProbe& st) {
-  const TraceSettings settings{std::min(options.bounces, 1), options.content & ~uint32_t(kContentEmissive)};
-  const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kGuideRotationTag));
-  const std::vector<glm::dvec3>& fibonacci = fibonacciSet(kGuidePilotPaths);
-  std::vector<glm::vec3> dirs(kGuidePilotPaths);
-  std::vector<float> lum(kGuidePilotPaths);
-  for (int k = 0; k < kGuidePilotPaths; ++k) {
-    dirs[size_t(k)] = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
-    Rng rng(streamKey(options.seed, index, kGuidePilotTag | uint64_t(k + 1)));
-    lum[size_t(k)] =
-        float(luminance(glm::dvec3(incidentRadiance(tracer, probe, dirs[size_t(k)], 0.0f, settings, rng))));
-  }
-  // Guide only where the light the pilot sees (one bounce) is most of what the probe's paths so far found
-  // (their mean radiance over the sphere, L00 Y00): elsewhere the light comes after more bounces, from
-  // anywhere, and directions drawn toward the first bounce's light would only thin the uniform half.
-  double pilotMean = 0.0;
-  for (float l : lum) pilotMean += std::isfinite(l) && l > 0.0f ? double(l) / kGuidePilotPaths : 0.0;
-  const double y00 = shBasis<double>(0.0, 0.0, 1.0)[0];
-  const double pathsMean =
-      luminance(glm::dvec3(st.acc[0][0], st.acc[0][1], st.acc[0][2])) * y00 / std::max(st.batches, 1);
-  if (!(pilotMean >= kGuideMinOneBounceShare * pathsMean)) return ProbeGuide();
-  return ProbeGuide(dirs, lum);
-}
-
-// Whether batch b of a probe is guided: adaptive sampling asked for it and the first samplesPerProbe paths
-// (pass 1, which every probe takes) are done.
+// Whether batch b of a probe takes part in guiding (recorded, and guided once kGuideLearnBatches are in):
+// adaptive sampling asked for it and the first samplesPerProbe paths (pass 1, which every probe takes) are
+// done, so pass 1 and a bake that stops there are the unguided bake's, bit for bit.
 bool guidedBatch(const BakeOptions& options, int b) {
   const int minBatches = std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
   return options.guide && options.targetRelError > 0.0 && b >= minBatches;
@@ -190,11 +164,9 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
   const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kBatchRotationTag | b));
   const bool emitters = samplesEmitters(tracer, options);
   const ProbeGuide* guide = nullptr;
-  if (slot && guidedBatch(options, st.batches)) {
-    if (!slot->built) {
-      slot->guide = buildGuide(tracer, probe, index, options, st);
-      slot->built = true;
-    }
+  const bool learn = slot && guidedBatch(options, st.batches);
+  if (learn && slot->batches >= kGuideLearnBatches) {
+    if (slot->batches % kGuideLearnBatches == 0) slot->guide = ProbeGuide(slot->histogram);
     if (slot->guide.active()) guide = &slot->guide;
   }
   // Unguided: kBakeBatchSize uniform directions, density 1 / (4 pi). Guided: half uniform, half from the
@@ -225,6 +197,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
     const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, settings, rng);
     const auto y = shBasis<double>(d.x, d.y, d.z);
     const double w = guide ? double(kSpherePdf) / double(pdf) : 1.0;  // in units of a uniform sample
+    if (learn) slot->histogram.add(d, luminance(glm::dvec3(l)) * w);
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * w * y[size_t(i)];
   }
@@ -237,6 +210,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
       acc[i][c] *= scale;
       st.acc[i][c] += acc[i][c];
     }
+  if (learn) ++slot->batches;
   double q[6];
   axisLuminance(acc, q);
   ++st.batches;

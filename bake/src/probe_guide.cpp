@@ -27,10 +27,12 @@ int guideBin(const glm::vec3& dir) {
   return zBin(double(dir.z)) * kGuidePhiBins + phiBin(double(dir.x), double(dir.y));
 }
 
-ProbeGuide::ProbeGuide(const std::vector<glm::vec3>& dirs, const std::vector<float>& luminance) {
-  std::array<double, kGuideBins> sum{};
-  for (size_t k = 0; k < dirs.size() && k < luminance.size(); ++k)
-    if (std::isfinite(luminance[k]) && luminance[k] > 0.0f) sum[size_t(guideBin(dirs[k]))] += luminance[k];
+void GuideHistogram::add(const glm::vec3& dir, double value) {
+  if (std::isfinite(value) && value > 0.0) sum[size_t(guideBin(dir))] += value;
+}
+
+ProbeGuide::ProbeGuide(const GuideHistogram& histogram) {
+  const std::array<double, kGuideBins>& sum = histogram.sum;
   std::array<double, kGuideBins> blurred{};
   double total = 0.0;
   for (int iz = 0; iz < kGuideZBins; ++iz)
@@ -56,12 +58,7 @@ ProbeGuide::ProbeGuide(const std::vector<glm::vec3>& dirs, const std::vector<flo
     density_[size_t(b)] = float(p / kBinSolidAngle);
   }
   cdf_[kGuideBins - 1] = 1.0;
-  double participation = 0.0;  // sum p^2 x bins: 1 for light from everywhere alike, kGuideBins from one bin
-  for (int b = 0; b < kGuideBins; ++b) {
-    const double p = double(density_[size_t(b)]) * kBinSolidAngle;
-    participation += p * p * kGuideBins;
-  }
-  active_ = participation >= kGuideMinConcentration;
+  active_ = true;
 }
 
 glm::vec3 ProbeGuide::sample(double u1, double u2, double u3) const {

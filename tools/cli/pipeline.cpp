@@ -667,9 +667,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     level.sh = std::move(fitted);
     stats.fitHoldoutAfter = shFitScore(level, holdout);
     stats.fitRan = true;
-    stats.fitKept =
-        options.fit == "on" || (stats.fitHoldoutAfter.meanRelError < stats.fitHoldoutBefore.meanRelError &&
-                                stats.fitHoldoutAfter.gross <= stats.fitHoldoutBefore.gross);
+    stats.fitKept = options.fit == "on" || shFitKept(stats.fitHoldoutBefore, stats.fitHoldoutAfter);
     if (!stats.fitKept) level.sh = traced;
     timer.mark("fit");
     stage.reset();

@@ -82,9 +82,9 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--noise")},
       {"--max-samples", "", "N", "adaptive sampling: paths per probe at most", def("--max-samples")},
       {"--guide", "", "on|off",
-       "adaptive sampling: a probe still above --noise after --samples paths traces a 256-path pilot and "
-       "draws half of its later directions toward where the pilot found light (unbiased; "
-       "docs/accuracy.md has the figures)",
+       "adaptive sampling: after --samples paths, a probe's later batches draw half their directions toward "
+       "where its earlier paths found light (path guiding of the first direction; unbiased; "
+       "docs/accuracy.md#probe-guiding)",
        def("--guide")},
       {"--path-budget", "", "N",
        "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "

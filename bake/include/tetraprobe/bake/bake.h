@@ -38,10 +38,10 @@ struct BakeOptions {
   // kBakeBudgetCapFactor x maxSamplesPerProbe paths), so a small level whose light arrives through a gap
   // converges instead of stopping at the cap. The shares depend only on path counts, never on threads.
   uint64_t pathBudget = 0;
-  // Adaptive sampling: after the first samplesPerProbe paths, a probe still above its target traces a pilot of
-  // 256 one-bounce paths; where the light it finds is concentrated and at least half the probe's light so far,
-  // each later batch draws half its directions from where the pilot found light (bake/src/probe_guide.h;
-  // unbiased: every direction weighted by the mixture's density). false: every batch uniform.
+  // Adaptive sampling: after the first samplesPerProbe paths, each pass that adds batches to a probe records
+  // where its paths find light (an equal-area histogram of first directions) and, after 4 batches, draws
+  // half of each batch's directions from it (bake/src/probe_guide.h; unbiased: every direction weighted by
+  // the mixture's density). false: every batch uniform.
   bool guide = true;
   int threads = 0;                      // 0 = all cores; never changes the result
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
