@@ -311,9 +311,7 @@ ShFitScore shFitScore(const Level& level, const std::vector<ShFitPoint>& points)
 
 bool shFitKept(const ShFitScore& before, const ShFitScore& after) {
   if (before.points == 0 || after.points == 0) return false;
-  const double g = std::clamp(before.gross, 0.0, 1.0);
-  const double se = std::sqrt(g * (1.0 - g) / double(before.points));
-  return after.meanRelError < before.meanRelError && after.gross <= before.gross + se;
+  return after.meanRelError < before.meanRelError && after.gross <= before.gross;
 }
 
 }  // namespace tetraprobe

@@ -310,17 +310,15 @@ TEST(ShFit, HoldoutScoreIsTheSavedLevelsError) {
   EXPECT_DOUBLE_EQ(score.gross, double(gross) / double(holdout.size()));
 }
 
-// The auto gate: a lower mean rel keeps the fit while gross rises within one binomial standard error of the
-// hold-out's share (0.055 on 1,747 points: se 0.00545), not beyond it, and never without a lower mean rel.
-TEST(ShFit, GateKeepsAFitWhoseGrossRisesWithinTheHoldoutsNoise) {
+// The auto gate: the fit is kept only with a lower mean rel and no higher gross share (Sponza's guided fit,
+// 0.0550 -> 0.0590 on 1,747 points, is dropped), and never on an empty score.
+TEST(ShFit, GateKeepsAFitOnlyWhenMeanRelDropsAndGrossDoesNotRise) {
   const ShFitScore before{1747, 0.2021, 0.0550};
-  EXPECT_TRUE(shFitKept(before, {1747, 0.1827, 0.0590}));         // +0.0040: 0.73 se
-  EXPECT_TRUE(shFitKept(before, {1747, 0.1827, 0.0550}));         // gross unchanged
-  EXPECT_FALSE(shFitKept(before, {1747, 0.1827, 0.0610}));        // +0.0060: 1.1 se
-  EXPECT_FALSE(shFitKept(before, {1747, 0.2021, 0.0500}));        // mean rel not lower
-  EXPECT_FALSE(shFitKept(ShFitScore{}, {1747, 0.1827, 0.0550}));  // nothing scored
-  // A level with no gross points before: any rise is beyond its noise (se 0).
-  EXPECT_FALSE(shFitKept({2048, 0.20, 0.0}, {2048, 0.10, 0.0005}));
+  EXPECT_TRUE(shFitKept(before, {1747, 0.1827, 0.0550}));
+  EXPECT_TRUE(shFitKept(before, {1747, 0.1827, 0.0500}));
+  EXPECT_FALSE(shFitKept(before, {1747, 0.1827, 0.0590}));
+  EXPECT_FALSE(shFitKept(before, {1747, 0.2021, 0.0500}));  // mean rel not lower
+  EXPECT_FALSE(shFitKept(ShFitScore{}, {1747, 0.1827, 0.0550}));
 }
 
 }  // namespace
