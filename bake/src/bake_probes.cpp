@@ -49,8 +49,8 @@ glm::vec3 sphereDirection(const glm::dmat3& rotation, int k, int n) {
 // The unrotated n-point set, cached per thread (the same doubles sphericalFibonacci gives: saves a double
 // sincos per path).
 const std::vector<glm::dvec3>& fibonacciSet(int n) {
-  thread_local std::vector<glm::dvec3> sets[3];  // a batch, a guided batch's uniform half, a pilot
-  std::vector<glm::dvec3>& set = sets[n == kBakeBatchSize ? 0 : n == kBakeBatchSize / 2 ? 1 : 2];
+  thread_local std::vector<glm::dvec3> sets[2];  // a batch's (or bakeProbe's n); a guided batch's uniform half
+  std::vector<glm::dvec3>& set = sets[n == kBakeBatchSize / 2 ? 1 : 0];
   if (set.size() != size_t(n)) {
     set.resize(size_t(n));
     for (int k = 0; k < n; ++k) set[size_t(k)] = sphericalFibonacci(k, n);

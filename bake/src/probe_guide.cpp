@@ -1,4 +1,4 @@
-// Directional guiding of a probe's sphere paths from a pilot histogram. Contract: probe_guide.h.
+// Directional guiding of a probe's sphere paths from a histogram of its own paths. Contract: probe_guide.h.
 #include "probe_guide.h"
 
 #include <algorithm>
