@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -49,7 +48,8 @@ glm::vec3 sphereDirection(const glm::dmat3& rotation, int k, int n) {
 // The unrotated n-point set, cached per thread (the same doubles sphericalFibonacci gives: saves a double
 // sincos per path).
 const std::vector<glm::dvec3>& fibonacciSet(int n) {
-  thread_local std::vector<glm::dvec3> sets[2];  // a batch's (or bakeProbe's n); a guided batch's uniform half
+  thread_local std::vector<glm::dvec3>
+      sets[2];  // a batch's (or bakeProbe's n); a guided batch's uniform half
   std::vector<glm::dvec3>& set = sets[n == kBakeBatchSize / 2 ? 1 : 0];
   if (set.size() != size_t(n)) {
     set.resize(size_t(n));
@@ -91,6 +91,12 @@ void addPunctualSh(const SceneTracer& tracer, const glm::vec3& probe, ShRgb& sh)
 constexpr float kSpherePdf = float(0.25 * std::numbers::inv_pi);
 constexpr uint64_t kEmitterSampleTag = 1ull << 61;
 
+// The density the sphere directions of a batch are drawn with: uniform without a guide, else the even mixture
+// of uniform and the guide (the emitter samples' MIS partner too).
+float sphereDirectionPdf(const ProbeGuide* guide, const glm::vec3& d) {
+  return guide ? 0.5f * kSpherePdf + 0.5f * guide->pdf(d) : kSpherePdf;
+}
+
 bool samplesEmitters(const SceneTracer& tracer, const BakeOptions& options) {
   return (options.content & kContentEmissive) && !tracer.impl().emissive.empty();
 }
@@ -100,16 +106,15 @@ bool samplesEmitters(const SceneTracer& tracer, const BakeOptions& options) {
 // (4 pi p)): the caller's 4 pi / count scale then gives their share of the projection.
 void addEmitterSamples(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
                        const BakeOptions& options, uint64_t first, int count, double acc[kShCoeffCount][3],
-                       const std::function<float(const glm::vec3&)>& spherePdf = {}) {
+                       const ProbeGuide* guide = nullptr) {
   for (int k = 0; k < count; ++k) {
     Rng rng(streamKey(options.seed, index, kEmitterSampleTag | (first + uint64_t(k))));
     EmitterSample e;
     if (!sampleEmitter(tracer, probe, rng, e)) continue;
     const float through = emitterTransmittance(tracer, probe, e);
     if (through <= 0.0f) continue;
-    const float sphere = spherePdf ? spherePdf(e.dir) : kSpherePdf;
-    const double weight =
-        double(through) * powerHeuristic(e.pdf, sphere) / (double(e.pdf) * 4.0 * std::numbers::pi);
+    const double weight = double(through) * powerHeuristic(e.pdf, sphereDirectionPdf(guide, e.dir)) /
+                          (double(e.pdf) * 4.0 * std::numbers::pi);
     const auto y = shBasis<double>(e.dir.x, e.dir.y, e.dir.z);
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) acc[i][c] += double(e.radiance[c]) * weight * y[size_t(i)];
@@ -139,6 +144,12 @@ void axisLuminance(const double sh[kShCoeffCount][3], double out[6]) {
 
 constexpr uint64_t kGuideDirectionTag = 1ull << 60;
 
+// Batches of adaptive sampling's pass 1: every probe's first samplesPerProbe paths, at least two (for an error
+// estimate).
+int passOneBatches(const BakeOptions& options) {
+  return std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
+}
+
 // A probe's guide while one pass adds its batches (probe_guide.h): the histogram of this pass's paths and the
 // guide last built from it. Kept only for that loop, so a later pass (the path budget's rounds, or the merge
 // of a sharded bake) learns again from its own batches: the same result wherever it runs, and no state for
@@ -153,8 +164,7 @@ struct GuideSlot {
 // adaptive sampling asked for it and the first samplesPerProbe paths (pass 1, which every probe takes) are
 // done, so pass 1 and a bake that stops there are the unguided bake's, bit for bit.
 bool guidedBatch(const BakeOptions& options, int b) {
-  const int minBatches = std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
-  return options.guide && options.targetRelError > 0.0 && b >= minBatches;
+  return options.guide && options.targetRelError > 0.0 && b >= passOneBatches(options);
 }
 
 void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options,
@@ -174,9 +184,6 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
   // stands for the sphere in the emitter samples' MIS.
   const int uniformCount = guide ? kBakeBatchSize / 2 : kBakeBatchSize;
   const std::vector<glm::dvec3>& fibonacci = fibonacciSet(uniformCount);
-  const auto mixturePdf = [&](const glm::vec3& d) {
-    return guide ? 0.5f * kSpherePdf + 0.5f * guide->pdf(d) : kSpherePdf;
-  };
   double acc[kShCoeffCount][3] = {};
   for (int k = 0; k < kBakeBatchSize; ++k) {
     glm::vec3 d;
@@ -192,7 +199,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
       const double u2 = pick.uniformDouble(), u3 = pick.uniformDouble();
       d = guide->sample(u1, u2, u3);
     }
-    const float pdf = mixturePdf(d);
+    const float pdf = sphereDirectionPdf(guide, d);
     Rng rng(streamKey(options.seed, index, b * kBakeBatchSize + uint64_t(k) + 1));
     const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, settings, rng);
     const auto y = shBasis<double>(d.x, d.y, d.z);
@@ -202,8 +209,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
       for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * w * y[size_t(i)];
   }
   if (emitters)
-    addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc,
-                      guide ? mixturePdf : std::function<float(const glm::vec3&)>());
+    addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc, guide);
   const double scale = 4.0 * std::numbers::pi / kBakeBatchSize;
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -396,7 +402,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       if (progress) progress->advance();
     });
   } else {
-    const int minBatches = std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
+    const int minBatches = passOneBatches(options);
     const int maxBatches = std::max(minBatches, options.maxSamplesPerProbe / kBakeBatchSize);
     std::vector<AdaptiveProbe> state(probes.size());
     auto run = [&](size_t i, auto&& body) {

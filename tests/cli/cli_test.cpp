@@ -245,8 +245,8 @@ TEST_F(Cli, BadInputExitsTwoAndLeavesNoOutput) {
 
 // A sharded bake (bake --shard I/N, merge) gives the one-process bake's level byte for byte, here with two
 // shards run one after the other (tools/distributed/run_local.sh runs three at once on the sample level,
-// with refinement; here one hole round and no refinement keep it to seconds). With probe guiding too: its
-// guides are rebuilt from the seed wherever batches are added (a shard's pass 2, the merge's path budget).
+// with refinement; here one hole round and no refinement keep it to seconds). With probe guiding too: each
+// pass learns its guides again from the batches it adds (a shard's pass 2, the merge's path budget).
 TEST_F(Cli, MergedShardsEqualOneProcessBake) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
