@@ -10,8 +10,9 @@
 // --- face blend: mirrors runtime/src/face_blend.cpp (faceBlendVisibility; formulas in face_blend.h) ---
 const float TETRAPROBE_FACE_BAND = 0.15, TETRAPROBE_FACE_TRUST = 0.1, TETRAPROBE_FACE_FALLBACK_BAND = 0.3,
             TETRAPROBE_FACE_BLIND_SUM = 0.05;
+const int TETRAPROBE_FACE_MAX_TETS = 48;
 
-// How blind a side is by its own visibility: 1 - smoothstep(0, TETRAPROBE_FACE_BLIND_SUM, visible sum).
+// How blind a tet is by its own visibility: 1 - smoothstep(0, TETRAPROBE_FACE_BLIND_SUM, visible sum).
 float tetraprobeFaceBlindness(vec4 weights, vec4 vis) {
   precise float sumW = 0.0, sumWV = 0.0;
   for (int i = 0; i < 4; ++i) {
@@ -25,88 +26,165 @@ float tetraprobeFaceBlindness(vec4 weights, vec4 vis) {
   precise float r = 1.0 - t * t * (3.0 - 2.0 * t);
   return r;
 }
-float tetraprobeFaceTrust(float blind) {  // c: the trust in a side
-  return 1.0 - (1.0 - TETRAPROBE_FACE_TRUST) * blind;
+float tetraprobeFaceTrust(float blind) {  // tau: the trust in a tet
+  precise float r = 1.0 - (1.0 - TETRAPROBE_FACE_TRUST) * blind;
+  return r;
 }
 
-// Tet t's visibility `vis` of its probes at x, blended near each face with the neighbour's visibility of
-// the face's probes, so that both sides of a face use the same numbers.
-vec4 tetraprobeFaceBlendVisibility(int t, vec4 weights, vec4 vis, vec3 x, vec3 n) {
-  // The faces whose blend may change anything (faceBlendMask, set at upload); none: nothing to do.
-  if (t < 0 || uint(t) >= tetraprobeOccTetCount) return vis;
-  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
-  uint flags = (header >> TETRAPROBE_OCC_FACE_MASK_SHIFT) & 15u;
-  if (flags == 0u) return vis;
-  ivec4 tv = tetraprobeTetVertices(t), nbs = tetraprobeTetNeighbours(t);
-  bool ownData = (header & 3u) != 0u;
-  vec4 o = vis;
+// omega of a tet whose weights at the point are w, for band `band`: 1 inside it, fading to 0 as the
+// weights below 0 sum to -band.
+float tetraprobeFaceReach(vec4 w, float band) {
+  precise float d = 0.0;
+  for (int g = 0; g < 4; ++g)
+    if (w[g] < 0.0) d = d + -w[g] / band;
+  if (!(d < 1.0)) return 0.0;  // beyond the band, or not finite
+  precise float omega = 1.0 - d * d * (3.0 - 2.0 * d);
+  return omega;
+}
+
+// One pass of the blend: per probe of tet t, the weighted visibility sums over the tets around the point
+// that hold it and reach it, found breadth first from t (face_blend.cpp, blendPass).
+struct TetraprobeBlendSums {
+  vec4 num, den, softMin;
+  ivec4 count;
+  bvec4 allOne;
+  float maxBlind;
+};
+TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame ownFrame, vec4 weights,
+                                            vec4 vis, vec3 x, vec3 n, float band, uint probes) {
+  TetraprobeBlendSums s;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
-  precise float band =
-      TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * ownBlind;
-  // The faces to consult first (cheap tests), then the costly part once per listed face: a SIMD lane group
-  // runs as many iterations as its busiest pixel has faces, not four.
-  int faces[4];
-  int count = 0;
-  for (int k = 0; k < 4; ++k) {
-    int nb = nbs[k];
-    if (!(weights[k] < band) || ((flags >> uint(k)) & 1u) == 0u) continue;  // a flag: nb >= 0
-    if (tetraprobeOccKind(nb) ==
-        0u) {  // the neighbour sees every probe: nothing to blend where this tet does too
-      bool allSeen = true;
-      for (int i = 0; i < 4; ++i) allSeen = allSeen && (i == k || vis[i] == 1.0);
-      if (!ownData || allSeen) continue;
-    }
-    faces[count++] = k;
+  s.maxBlind = ownBlind;
+  for (int i = 0; i < 4; ++i) {
+    precise float num = ownTrust * vis[i];
+    s.num[i] = num;
+    s.den[i] = ownTrust;
+    s.softMin[i] = vis[i];
+    s.allOne[i] = vis[i] == 1.0;
+    s.count[i] = 0;
   }
-  if (count == 0) return vis;
-  // A probe behind the surface is not raised above the lower side's visibility (unless a side sees nothing).
-  vec4 front = tetraprobeProbeFront(t, x, n);
-  for (int q = 0; q < count; ++q) {
-    int k = faces[q];
-    int nb = nbs[k];
-    bool otherData = tetraprobeOccKind(nb) != 0u;
-    ivec4 nv = tetraprobeTetVertices(nb);
-    precise float d = max(weights[k], 0.0) / band;
-    vec4 other = vec4(1.0);
-    float otherBlind = 0.0;
-    precise float c = ownTrust / (ownTrust + 1.0);
-    if (otherData) {
-      ivec4 nn = tetraprobeTetNeighbours(nb);
-      int m = 0;
-      while (m < 4 && nn[m] != t) ++m;
-      if (m == 4) continue;
+  // Breadth first across faces: a tet that reaches the point lists its neighbour M across face k when M holds
+  // a blended probe and the point lies within M's band of the face (face_blend.cpp, blendPass).
+  int tried[TETRAPROBE_FACE_MAX_TETS];
+  int count = 0, head = 1;
+  tried[count++] = t;
+  int u = t;
+  TetraprobeBaryFrame fu = ownFrame;
+  vec4 wu = tetraprobeBaryWeights(ownFrame, x);
+  for (;;) {
+    ivec4 uv = tetraprobeTetVertices(u), un = tetraprobeTetNeighbours(u);
+    for (int k = 0; k < 4; ++k) {
+      int m = un[k];
+      if (m < 0) continue;
+      bool seen = false;
+      for (int q = 0; q < count && !seen; ++q) seen = tried[q] == m;
+      if (seen) continue;
+      ivec4 mv = tetraprobeTetVertices(m);
+      bool holds = false;
+      for (int i = 0; i < 4; ++i)
+        if (((probes >> uint(i)) & 1u) != 0u)
+          for (int j = 0; j < 4; ++j) holds = holds || mv[j] == tv[i];
+      if (!holds) continue;
+      int j = 0;  // M's vertex off the shared face
+      while (j < 4 && (mv[j] == uv.x || mv[j] == uv.y || mv[j] == uv.z || mv[j] == uv.w)) ++j;
+      if (j < 4) {
+        float far = tetraprobeBaryWeights(fu, tetraprobeProbePosition(mv[j]))[k];
+        precise float limit = band * -far;
+        if (!(wu[k] < limit)) continue;
+      }
+      if (count == TETRAPROBE_FACE_MAX_TETS) return s;  // the list is full: what was found so far
+      tried[count++] = m;
+    }
+    // The next listed tet that reaches the point: its sums, then its neighbours.
+    bool found = false;
+    while (head < count && !found) {
+      int nb = tried[head++];
+      ivec4 nv = tetraprobeTetVertices(nb);
       TetraprobeBaryFrame f = tetraprobeBaryFrame(nb);
       vec4 w = tetraprobeBaryWeights(f, x);
-      d = max(d, -w[m] / band);
-      if (!(d < 1.0)) continue;
-      other = tetraprobeOccVisibilityInFrame(nb, f, x, n);
-      otherBlind = tetraprobeFaceBlindness(w, other);
-      c = ownTrust / (ownTrust + tetraprobeFaceTrust(otherBlind));
+      float omega = tetraprobeFaceReach(w, band);
+      if (!(omega > 0.0)) continue;
+      vec4 v = tetraprobeOccKind(nb) == 0u ? vec4(1.0) : tetraprobeOccVisibilityInFrame(nb, f, x, n);
+      float blind = tetraprobeFaceBlindness(w, v);
+      precise float wt = omega * tetraprobeFaceTrust(blind);
+      precise float ob = omega * blind;
+      s.maxBlind = max(s.maxBlind, ob);
+      for (int i = 0; i < 4; ++i) {
+        if (((probes >> uint(i)) & 1u) == 0u) continue;
+        int slot = 0;
+        while (slot < 4 && nv[slot] != tv[i]) ++slot;
+        if (slot == 4) continue;
+        float vj = v[slot];
+        precise float num = s.num[i] + wt * vj;
+        precise float den = s.den[i] + wt;
+        precise float soft = omega * vj + (1.0 - omega);
+        s.num[i] = num;
+        s.den[i] = den;
+        s.softMin[i] = min(s.softMin[i], soft);
+        s.allOne[i] = s.allOne[i] && vj == 1.0;
+        s.count[i] += 1;
+      }
+      u = nb;
+      fu = f;
+      wu = w;
+      found = true;
     }
-    if (!(d < 1.0)) continue;
-    precise float a = 1.0 - d * d * (3.0 - 2.0 * d);
-    float anyBlind = max(ownBlind, otherBlind);
-    for (int i = 0; i < 4; ++i) {
-      if (i == k) continue;
-      int j = 0;
-      while (j < 4 && nv[j] != tv[i]) ++j;
-      if (j == 4) continue;
-      precise float target =
-          min(c * vis[i] + (1.0 - c) * other[j], max(max(min(vis[i], other[j]), front[i]), anyBlind));
-      precise float r = o[i] + a * (target - vis[i]);
-      o[i] = r;
+    if (!found) break;
+  }
+  return s;
+}
+
+vec4 tetraprobeFaceBlendResolve(TetraprobeBlendSums s, vec4 vis, vec4 front, uint probes) {
+  vec4 o = vis;
+  for (int i = 0; i < 4; ++i) {
+    if (((probes >> uint(i)) & 1u) == 0u || s.count[i] == 0) continue;
+    if (s.allOne[i]) {
+      o[i] = 1.0;
+      continue;
     }
+    precise float avg = s.num[i] / s.den[i];
+    o[i] = min(avg, max(max(s.softMin[i], front[i]), s.maxBlind));
   }
   return clamp(o, 0.0, 1.0);
 }
 
-// The visibility the lookup uses at located point loc (local x, normal n): its tet's, blended near faces
-// with the neighbours' inside the hull (shadeLocated, runtime/shade.h).
+// Tet t's visibility `vis` of its probes at x, each blended over the tets around x that hold the probe, so
+// that every tet holding x uses the same numbers (faces, edges and corners alike).
+vec4 tetraprobeFaceBlendVisibility(int t, TetraprobeBaryFrame frame, vec4 weights, vec4 vis, vec3 x, vec3 n,
+                                   uint probes) {
+  ivec4 tv = tetraprobeTetVertices(t);
+  vec4 front = tetraprobeProbeFront(t, x, n);
+  vec4 o = tetraprobeFaceBlendResolve(
+      tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, TETRAPROBE_FACE_BAND, probes), vis, front,
+      probes);
+  // Where the blend still sees nothing, a wider band: the neighbours' sight reaches deeper into the tet.
+  float blind = tetraprobeFaceBlindness(weights, o);
+  if (blind > 0.0) {
+    precise float band =
+        TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * blind;
+    o = tetraprobeFaceBlendResolve(tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, band, probes), vis,
+                                   front, probes);
+  }
+  return o;
+}
+
+// The probes of tet t whose blend may change anything (faceBlendMask, set at upload; 0 for none).
+uint tetraprobeFaceBlendProbes(int t) {
+  if (t < 0 || uint(t) >= tetraprobeOccTetCount) return 0u;
+  uint header = tetraprobeOccData[TETRAPROBE_OCC_RECORD_UINTS * uint(t)];
+  return (header >> TETRAPROBE_OCC_PROBE_MASK_SHIFT) & 15u;
+}
+
+// The visibility the lookup uses at located point loc (local x, normal n): its tet's, blended with the
+// tets' around it inside the hull (shadeLocated, runtime/shade.h).
 vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
-  vec4 vis = tetraprobeOccVisibility(loc.tet, x, n);
-  if (loc.outerCell < 0) vis = tetraprobeFaceBlendVisibility(loc.tet, loc.weights, vis, x, n);
-  return vis;
+  uint probes = loc.outerCell < 0 ? tetraprobeFaceBlendProbes(loc.tet) : 0u;
+  if (probes == 0u) return tetraprobeOccVisibility(loc.tet, x, n);
+  // The tet's frame once, for its own data and the blend.
+  TetraprobeBaryFrame frame = tetraprobeBaryFrame(loc.tet);
+  vec4 vis = tetraprobeOccKind(loc.tet) == 0u ? vec4(1.0) : tetraprobeOccVisibilityInFrame(loc.tet, frame, x, n);
+  return tetraprobeFaceBlendVisibility(loc.tet, frame, loc.weights, vis, x, n, probes);
 }
 
 #endif  // TETRAPROBE_FACE_BLEND_GLSL

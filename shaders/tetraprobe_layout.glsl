@@ -32,7 +32,7 @@
 #define TETRAPROBE_OCC_RECORD_UINTS 1u          // a tet's occlusion record: its header [kGpuOccRecordUints]
 #define TETRAPROBE_OCC_KIND_PLANES 1u           // header & 3 [kOcclusionPlanes]
 #define TETRAPROBE_OCC_KIND_SHADOW_MAPS 2u      // header & 3 [kOcclusionShadowMaps]
-#define TETRAPROBE_OCC_FACE_MASK_SHIFT 4u       // (header >> it) & 15: face flags [kGpuOccFaceMaskShift]
+#define TETRAPROBE_OCC_PROBE_MASK_SHIFT 4u      // (header >> it) & 15: probe flags [kGpuOccProbeMaskShift]
 #define TETRAPROBE_OCC_OFFSET_SHIFT 8u          // header >> it: the first plane or block [kGpuOccOffsetShift]
 #define TETRAPROBE_OCC_PLANE_UINTS 2u           // a plane: four snorm16 [OcclusionPlane]
 // snorm16 to float: the float nearest 1 / 32767 [OcclusionPlane::kOcclusionPlaneUnit]
@@ -107,7 +107,7 @@ layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 4) readonly 
 };
 
 // Per-tet occlusion (tetraprobe::GpuOcclusionHeader, runtime/occlusion.h). data[t]: tet t's header (kind,
-// plane count, face flags, offset; gpu_layout.h). A plane tet's block from tetraprobeOccPlaneOffset + offset:
+// plane count, probe flags, offset; gpu_layout.h). A plane tet's block from tetraprobeOccPlaneOffset + offset:
 // its cells word, then its planes (2 uints each: four snorm16). A shadow-map tet's block from
 // tetraprobeOccShadowOffset + 16 offset (16 uints, bytes little-endian). tetraprobeOccTetCount 0: none.
 layout(std430, set = TETRAPROBE_SET, binding = TETRAPROBE_BINDING + 5) readonly buffer TetraprobeOcclusion {

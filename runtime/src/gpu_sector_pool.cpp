@@ -438,13 +438,26 @@ void GpuSectorPool::linkFaces(int32_t slot) {
     pool_.tets[size_t(slot)].n[k] = other;
     pool_.tets[size_t(other)].n[m] = slot;
     writeTet(other);
-    if (occlusion_) writeOcclusionHeader(other);  // its face flag k may change with the neighbour
   }
   writeTet(slot);
 }
 
+void GpuSectorPool::writeStarHeaders(const std::vector<int32_t>& slots) {
+  // The probe flags of a tet read its probes' stars (face_blend.h): every tet of the stars around these.
+  std::vector<int32_t> touched;
+  for (int32_t s : slots)
+    for (int i = 0; i < 4; ++i) {
+      const std::vector<int32_t> star = faceBlendStar(pool_, s, i);
+      touched.insert(touched.end(), star.begin(), star.end());
+    }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  for (int32_t s : touched) writeOcclusionHeader(s);
+}
+
 void GpuSectorPool::unlinkFaces(int32_t slot) {
   Tet& t = pool_.tets[size_t(slot)];
+  std::vector<int32_t> former;
   for (int k = 0; k < 4; ++k) {
     const FaceKey f = faceKey(slot, k);
     const auto it = faces_.find(f);
@@ -463,10 +476,12 @@ void GpuSectorPool::unlinkFaces(int32_t slot) {
       for (int m = 0; m < 4; ++m)
         if (o.n[m] == slot) o.n[m] = -1;
       writeTet(other);
-      if (occlusion_) writeOcclusionHeader(other);
+      former.push_back(other);
       t.n[k] = -1;
     }
   }
+  // The former neighbours' stars lost this tet (its data no longer reaches their probe flags).
+  if (occlusion_) writeStarHeaders(former);
 }
 
 LevelResult GpuSectorPool::load(const SectorKey& key) {
@@ -516,7 +531,7 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
     }
     ++probeRefs_[size_t(it->second)];
   }
-  // Tets: records and occlusion first (the face flags read the neighbours' occlusion), then the links.
+  // Tets: records and occlusion first (the probe flags read the stars' occlusion), then the links.
   std::vector<int32_t> added;
   size_t plane = 0, block = 0;
   for (size_t k = 0; k < r.tetIds.size(); ++k) {
@@ -571,8 +586,7 @@ LevelResult GpuSectorPool::load(const SectorKey& key) {
     ++tetRefs_[size_t(it->second)];
   }
   for (int32_t s : added) linkFaces(s);
-  if (occlusion_)
-    for (int32_t s : added) writeOcclusionHeader(s);
+  if (occlusion_) writeStarHeaders(added);
 
   // The start brick: each sub-cell's centre descends the cell's BSP to its leaf tet, then walks toward the
   // centre over the resident tets as buildStartBricks does; an empty leaf takes the previous entry's start.

@@ -328,6 +328,7 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
   if (!occ.empty() && occ.tets.size() == level.tets.size()) {
     // Headers, then the plane tets' blocks (cells word and planes) in tet order, then the shadow maps.
     std::vector<uint32_t> headers(occ.tets.size()), planeBlocks;
+    const std::vector<uint8_t> masks = faceBlendMasks(level, occ);  // one a tet (sizes equal: above)
     for (size_t t = 0; t < occ.tets.size(); ++t) {
       const TetOcclusion& rec = occ.tets[t];
       uint32_t offset = rec.offset();
@@ -349,7 +350,7 @@ bool packLevelBuffers(const Level& level, const StartGrid& grid, const std::vect
           *error = "tet " + std::to_string(t) + "'s occlusion offset is beyond the GPU record's 2^24";
         return fail();
       }
-      headers[t] = gpuOcclusionHeader(rec, faceBlendMask(level, occ, int32_t(t)), offset);
+      headers[t] = gpuOcclusionHeader(rec, masks[t], offset);
     }
     occHeader.tetCount = uint32_t(occ.tets.size());
     occHeader.planeOffset = uint32_t(headers.size());

@@ -101,13 +101,13 @@ TEST(FaceBlend, NothingChangesBeyondTheBandOnHullFacesOrBetweenTetsWithoutData) 
   for (int i = 0; i < 4; ++i) EXPECT_EQ(outNone[i], 1.0f);
 }
 
-// The face flag (faceBlendFaceFlag) is cleared on a face whose probes both sides see at exactly 1 wherever
-// their data is evaluated, and set where a side may hide one; where it is cleared the flagged blend equals
-// the blend over every face bit for bit, at random points on and near the face, with random normals. Three
-// cases of data on tet 0 that never hides the face's probes (slots 1..3): one plane whose cells both see them
-// (only its own probe 0 is hidden on one side), shadow maps that meet nothing from those probes, and the same
+// The probe flag (faceBlendProbeFlag) is cleared on a probe every tet holding it sees at exactly 1 wherever
+// its data is evaluated, and set where a tet may hide it; where it is cleared the flagged blend equals the
+// blend of every probe bit for bit, at random points on and near the face, with random normals. Three cases
+// of data on tet 0 that never hides the face's probes (slots 1..3): one plane whose cells both see them (only
+// its own probe 0 is hidden on one side), shadow maps that meet nothing from those probes, and the same
 // with tet 1 storing its own such plane.
-TEST(FaceBlend, UnflaggedFaceWithDataChangesNoVisibility) {
+TEST(FaceBlend, UnflaggedProbeWithDataChangesNoVisibility) {
   Level level = twoTets();
   LevelOcclusion onePlane;
   onePlane.planes.push_back(makeOcclusionPlane(1.0, -0.5, -0.5, -0.5));
@@ -125,9 +125,13 @@ TEST(FaceBlend, UnflaggedFaceWithDataChangesNoVisibility) {
   std::normal_distribution<float> g(0.0f, 1.0f);
   for (const LevelOcclusion* occ : {&onePlane, &maps, &both}) {
     level.occlusion = *occ;
-    EXPECT_FALSE(faceBlendFaceFlag(level, level.occlusion, 0, 0));
-    EXPECT_FALSE(faceBlendFaceFlag(level, level.occlusion, 1, 0));
-    EXPECT_EQ(faceBlendMask(level, level.occlusion, 0), 0u);  // faces 1..3 are on the hull
+    for (int i = 1; i < 4; ++i) {  // the face's probes, in either tet
+      EXPECT_FALSE(faceBlendProbeFlag(level, level.occlusion, 0, i));
+      EXPECT_FALSE(faceBlendProbeFlag(level, level.occlusion, 1, i));
+    }
+    EXPECT_EQ(faceBlendMask(level, level.occlusion, 0), 1u);  // probe 0 is hidden in one cell or map
+    EXPECT_EQ(faceBlendMask(level, level.occlusion, 1),
+              occ == &both ? 1u : 0u);  // probe 4 where tet 1 hides it
     int moved = 0;
     for (int s = 0; s < 2000; ++s) {
       const int32_t tet = s % 2;
@@ -138,35 +142,39 @@ TEST(FaceBlend, UnflaggedFaceWithDataChangesNoVisibility) {
       const glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
       const BaryFrame f = baryFrame(level.tets[size_t(tet)], level.probes);
       const glm::vec4 own = occlusionVisibility(level, level.occlusion, tet, f, x, n);
-      const glm::vec4 flagged = faceBlendVisibility(level, level.occlusion, tet, w, own, x, n);
-      const glm::vec4 every =
-          faceBlendVisibility(level, level.occlusion, tet, w, own, x, n, kFaceBlendEveryFace);
+      const glm::vec4 flagged =
+          faceBlendVisibility(level, level.occlusion, tet, w, own, x, n, kFaceBlendFlaggedProbes);
+      const glm::vec4 every = faceBlendVisibility(level, level.occlusion, tet, w, own, x, n);
       for (int i = 0; i < 4; ++i) ASSERT_EQ(flagged[i], every[i]) << "point " << s << " slot " << i;
       moved += own != glm::vec4(1.0f);
     }
     EXPECT_GT(moved, 100);  // the data acts (on the probe opposite the face), just not on the face's probes
   }
-  // A plane hiding a face probe on one side sets the flag on both.
+  // A plane hiding the face's probes in tet 0 flags them in both tets (a probe's flag is the star's).
   level.occlusion = hideFaceProbesInTet0();
-  EXPECT_TRUE(faceBlendFaceFlag(level, level.occlusion, 0, 0));
-  EXPECT_TRUE(faceBlendFaceFlag(level, level.occlusion, 1, 0));
-  EXPECT_EQ(faceBlendMask(level, level.occlusion, 1), 1u);
+  EXPECT_EQ(faceBlendMask(level, level.occlusion, 0), 14u);
+  EXPECT_EQ(faceBlendMask(level, level.occlusion, 1), 14u);
 }
 
 // A tet whose own data hides all four probes (it falls back) looks for light its neighbour sees deeper in:
-// the band widens with its fallback share to kFaceBlendFallbackBand.
+// where the first pass leaves it blind, the band widens to kFaceBlendFallbackBand. The band is in tet 1's
+// units (it reaches into tet 0): its height over the shared face is 1.3 m, tet 0's 1 m, so the walk
+// parameter t below is the depth in metres.
 TEST(FaceBlend, ATetThatSeesNothingTakesItsNeighboursSightDeeper) {
   Level level = twoTets();
   level.occlusion = hideFaceProbesInTet0();
   level.occlusion.tets[0].cells = 0x00u;  // tet 0 sees none of its probes, on either side of its plane
   const glm::vec3 f = facePoint(level, 0.3, 0.3), p0 = level.probes[0];
   const auto at = [&](float t) { return faceProbeVisibility(level, 0, f + t * (p0 - f), glm::vec3(0.0f)); };
-  // Beyond the plain band (0.15) but inside the widened one: some of the neighbour's sight.
-  const float t = 0.2f, x = t / kFaceBlendFallbackBand, a = 1.0f - x * x * (3.0f - 2.0f * x);
-  const float expected = a / (1.0f + kFaceBlendFallbackTrust);  // trust 0.1 against 1
+  const float face = 1.3f;  // tet 1's height over the face
+  // Beyond the plain band but inside the widened one: some of the neighbour's sight.
+  const float t = 0.5f * (kFaceBlendBand + kFaceBlendFallbackBand) * face;
+  ASSERT_GT(t, kFaceBlendBand * face);
+  const float x = t / (kFaceBlendFallbackBand * face), a = 1.0f - x * x * (3.0f - 2.0f * x);
+  const float expected = a / (a + kFaceBlendFallbackTrust);  // tet 0 trusted 0.1, tet 1 1 at reach a
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(at(t)[i], expected, 2e-3f);
   // Past the widened band: the tet's own data alone.
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(at(kFaceBlendFallbackBand + 0.01f)[i], 0.0f);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(at(kFaceBlendFallbackBand * face + 0.01f)[i], 0.0f);
 }
 
 // A probe behind the surface is never seen from it: where neither side is blind, the neighbour may not raise

@@ -288,7 +288,7 @@ std::map<std::string, Twin> cppTwins() {
       {"TETRAPROBE_OCC_RECORD_UINTS", i(kGpuOccRecordUints)},
       {"TETRAPROBE_OCC_KIND_PLANES", i(kOcclusionPlanes)},
       {"TETRAPROBE_OCC_KIND_SHADOW_MAPS", i(kOcclusionShadowMaps)},
-      {"TETRAPROBE_OCC_FACE_MASK_SHIFT", i(kGpuOccFaceMaskShift)},
+      {"TETRAPROBE_OCC_PROBE_MASK_SHIFT", i(kGpuOccProbeMaskShift)},
       {"TETRAPROBE_OCC_OFFSET_SHIFT", i(kGpuOccOffsetShift)},
       {"TETRAPROBE_OCC_PLANE_UINTS", i(sizeof(OcclusionPlane) / sizeof(uint32_t))},
       {"TETRAPROBE_OCC_PLANE_UNIT", f(OcclusionPlane::kOcclusionPlaneUnit)},
@@ -315,6 +315,7 @@ std::map<std::string, Twin> cppTwins() {
       {"TETRAPROBE_FACE_TRUST", f(kFaceBlendFallbackTrust)},
       {"TETRAPROBE_FACE_FALLBACK_BAND", f(kFaceBlendFallbackBand)},
       {"TETRAPROBE_FACE_BLIND_SUM", f(kFaceBlendBlindSum)},
+      {"TETRAPROBE_FACE_MAX_TETS", i(kFaceBlendMaxTets)},
       // SH (sh.h), rounded to float as the CPU's float(k).
       {"kTetraprobeY00", f(sh_const::kY00)},
       {"kTetraprobeY1", f(sh_const::kY1)},

@@ -1,5 +1,6 @@
 // Streaming index (stream_index.h): sectors from the cell grid's occupied cells, each holding the tets whose
-// bounding boxes touch the cell (grown by a margin) and their face neighbours, their probes and the cell's
+// bounding boxes touch the cell (grown by a margin) and the tets sharing a probe with one that the face blend
+// may consult there, their probes and the cell's
 // BSP renumbered from 0; and a coarse probe set (one probe per coarse cube, nearest its centre) tetrahedralized with CGAL Delaunay. Layout
 // in docs/level_format.md (section STRM).
 #include "tetraprobe/tetra/stream_index.h"
@@ -14,6 +15,7 @@
 #include <glm/common.hpp>
 
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/tetra/tetrahedralize.h"
 
 namespace tetraprobe {
@@ -90,6 +92,16 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
     d.root = s.root;
     sectors.emplace(std::array<int32_t, 3>{s.key[0], s.key[1], s.key[2]}, d);
   }
+  // The tets holding each probe (a probe's star), for the sectors' rings below.
+  std::vector<uint32_t> starStart(level.probes.size() + 1, 0), starTets(4 * level.tets.size());
+  for (const Tet& t : level.tets)
+    for (int32_t v : t.v) ++starStart[size_t(v) + 1];
+  for (size_t p = 0; p < level.probes.size(); ++p) starStart[p + 1] += starStart[p];
+  {
+    std::vector<uint32_t> fill(starStart.begin(), starStart.end() - 1);
+    for (size_t t = 0; t < level.tets.size(); ++t)
+      for (int32_t v : level.tets[t].v) starTets[fill[size_t(v)]++] = uint32_t(t);
+  }
   // Tets by bounding box (grown by the margin) into the cells they touch.
   for (size_t t = 0; t < level.tets.size(); ++t) {
     glm::dvec3 lo(level.probes[size_t(level.tets[t].v[0])]), hi = lo;
@@ -135,12 +147,24 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
       node.child[1] = local(node.child[1]);
       d.nodes.push_back(node);
     }
-    // The face blend (runtime/face_blend.h) consults a tet's face neighbours: they join the sector too (one
-    // ring), so a loaded sector answers as the full level does.
+    // The face blend (runtime/face_blend.h) consults the tets holding a tet's probes that reach the point:
+    // those that may reach the cell (grown by the margin) join the sector too, so a loaded sector answers
+    // as the full level does.
+    glm::dvec3 cellLo, cellHi;
+    for (int a = 0; a < 3; ++a) {
+      cellLo[a] = double(g.min[a]) + double(d.key[a]) * cs - options.margin;
+      cellHi[a] = cellLo[a] + cs + 2.0 * options.margin;
+    }
     const size_t own = d.tets.size();
+    std::vector<uint32_t> ring;
     for (size_t i = 0; i < own; ++i)
-      for (int32_t nb : level.tets[d.tets[i]].n)
-        if (nb >= 0) d.tets.push_back(uint32_t(nb));
+      for (int32_t v : level.tets[d.tets[i]].v)
+        for (uint32_t k = starStart[size_t(v)]; k < starStart[size_t(v) + 1]; ++k)
+          ring.push_back(starTets[k]);
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    for (uint32_t t : ring)
+      if (faceBlendMayReach(level, int32_t(t), cellLo, cellHi)) d.tets.push_back(t);
     std::sort(d.tets.begin(), d.tets.end());
     d.tets.erase(std::unique(d.tets.begin(), d.tets.end()), d.tets.end());
     for (uint32_t t : d.tets)

@@ -275,7 +275,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (stats.finalChecked > 0)
     std::printf(
         "  fallback %zu of %zu surface points (%.1f %%) see none of their tet's probes in the finished "
-        "level by its data; %zu (%.1f %%) after the face blend with the neighbours' (the lookup's answer)\n",
+        "level by its data; %zu (%.1f %%) after the face blend with the tets around them (the lookup's "
+        "answer)\n",
         stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked),
         stats.finalLookupFallbacks, 100.0 * double(stats.finalLookupFallbacks) / double(stats.finalChecked));
   const CellGrid& grid = level.cellGrid;

@@ -63,12 +63,12 @@ void explain(const ProbeQuery& query, const glm::dvec3& world, const glm::vec3& 
   else
     std::printf("explain: inside tet %d\n", loc.tet);
   std::printf("  occlusion: %s\n", occlusionKindText(level, loc.tet));
-  // What the answer uses: the tet's data blended near faces with its neighbours' (face_blend.h).
+  // What the answer uses: the tet's data blended with the tets' around the point (face_blend.h).
   const glm::vec4 own = record.ownVisibility, vis = record.visibility;
   if (vis != own)
     std::printf(
-        "  face blend: near a face the visibility below is blended with the neighbour's (the tet's data "
-        "alone: %.3f %.3f %.3f %.3f)\n",
+        "  face blend: the visibility below is blended with the tets' around the point that hold each probe "
+        "(the tet's data alone: %.3f %.3f %.3f %.3f)\n",
         own.x, own.y, own.z, own.w);
   const float fallback = record.fallback;
   // The rays column only with a tracer, so the rows read the same as before without one.

@@ -1,48 +1,54 @@
-// Occlusion without seams across shared faces. Each tet's occlusion data (runtime/occlusion.h) is fitted on
-// its own, so two tets sharing a face can disagree on which of the face's three probes a point sees; the
-// light then jumps on the face, and where one side sends the point to the all-occluded fallback and the
-// other does not, a render shows hard-edged polygons. Near a face the visibility of the face's three probes
-// is therefore blended with the neighbour's visibility of the same probes at the same point (the
-// neighbour's data evaluated there, just outside it), so that on the face both tets use the same numbers.
+// Occlusion without seams across faces, edges and corners. Each tet's occlusion data (runtime/occlusion.h) is
+// fitted on its own, so two tets holding a probe can disagree on whether a point sees it; the light then
+// jumps where the point crosses from one tet to the other, and where one side sends the point to the
+// all-occluded fallback and the other does not, a render shows hard-edged polygons. The visibility of each
+// probe is therefore a partition of unity over the tets around the point that hold the probe: every such tet
+// S evaluates its own data at the point (just outside S, its data extrapolated), weighted by how far the
+// point lies inside S's band, and those weights are functions of the point alone, so every tet holding the
+// point computes the same visibility of a shared probe: continuous across faces, along edges (the ring of
+// tets around an edge) and at corners (the star of a vertex).
 //
-// For the point's tet T with located weights w (w_k = 0 on the face opposite probe k), its visibility v,
-// the neighbour N_k across that face, m_k = N_k's weight of its own vertex opposite the face (<= 0 in T),
-// v'_i = N_k's visibility of T's probe i (i != k; 1 when N_k stores nothing), front_i = probeFront of T's
-// probe i at the point (0 behind the surface) and b, b' the blindness of T and N_k at the point by their
-// own visibility alone, b = 1 - smoothstep(0, kFaceBlendBlindSum, s) with s the visible weight sum
-// applyOcclusion computes (1 where a side sees none of its probes; gentler than the fallback's share so
-// float rounding of s moves what it drives five times less, keeping GPU and CPU within 1e-5):
-//   B   = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) b    (the band: wider where T's own
-//                                             data sees nothing, so such a tet takes what its neighbours see
-//                                             throughout instead of the fallback's guess)
-//   x_k = max(w_k, -m_k) / B                 (distance to the face in band units, in the thinner of the two
-//                                             tets: N_k's data is extrapolated at most a band of its own
-//                                             height; w_k / B when N_k stores nothing)
-//   a_k = 1 - smoothstep(0, 1, x_k)          (1 on the face, 0 from one band in)
-//   t = 1 - (1 - kFaceBlendFallbackTrust) b,  t' likewise from b'    (trust: a side that sees none of its
-//                                             probes is trusted a tenth as much as one that sees)
-//   c = t / (t + t')
-//   target_i = min(c v_i + (1 - c) v'_i, max(min(v_i, v'_i), front_i, max(b, b')))
-//                                             (a probe behind the surface is never seen from it: the
-//                                             neighbour may not raise it above the lower side's visibility,
-//                                             unless a side is blind, where any light it sees beats the
-//                                             fallback's guess; a ceiling's leak on q3 dm4ish came from it)
-//   v_i <- v_i + sum_{k != i} a_k (target_i - v_i),   clamped to [0, 1]
-// On the face opposite probe k, away from the other faces' bands, both tets get the same target for each of
-// the face's probes (every term is symmetric in the two sides); their weights there agree, the fourth
-// probe's is 0, so the occluded blend, the fallback's share and the fallback's answer (occludedIrradiance)
-// agree: the light is continuous across the face. Within a band of an edge the tets around the edge that
-// are not face neighbours are not consulted, so a smaller jump can remain along edges (tests/stability).
-// Only visibility is fetched from the neighbour (its frame and occlusion record; no SH). Cost: about 1.5
-// faces per point qualify; a point's occluded shading takes about twice as long on the CPU and 1.6x on
-// lavapipe (docs/occlusion.md).
-// Faces on the hull, faces whose two tets both store no occlusion (every probe visible on both sides), a
-// neighbour storing nothing where this tet sees every probe too (nothing would change) and points outside
-// the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe_face_blend.glsl
+// For the point x in tet T with located weights w and own visibility v, and each probe p of T:
+//   omega_S(x) = 1 - smoothstep(0, 1, d),  d = sum over S's weights w_S,g(x) < 0 of -w_S,g(x) / B
+//                                             (S's barycentric weights extrapolated: 1 on and inside S,
+//                                             falling to 0 one band out past a face, B of S's height over
+//                                             it, sooner near its edges and corners; so a sliver's data is
+//                                             never extrapolated far, and the region where omega_S > 0 is
+//                                             the tet grown by a fixed share of itself)
+//   b_S = 1 - smoothstep(0, kFaceBlendBlindSum, s_S)   (blindness: s_S the visible weight sum applyOcclusion
+//                                             computes from S's weights and visibility at x; 1 where S sees
+//                                             none of its probes; gentler than the fallback's share so float
+//                                             rounding of s moves what it drives five times less)
+//   tau_S = 1 - (1 - kFaceBlendFallbackTrust) b_S      (a blind tet is trusted a tenth as much)
+//   avg_p = sum_S omega_S tau_S v_S,p / sum_S omega_S tau_S        (S over the tets holding p, T included)
+//   m_p   = min_S (omega_S v_S,p + 1 - omega_S)        (the lowest visibility, faded in with its tet)
+//   beta  = max_S omega_S b_S                          (over every tet found)
+//   v_p  <- min(avg_p, max(m_p, front_p, beta)),  clamped to [0, 1]
+//                                             (a probe behind the surface, front_p = 0 from probeFront, is
+//                                             never raised above the lowest tet's visibility, unless a tet is
+//                                             blind, where any light it sees beats the fallback's guess; a
+//                                             ceiling's leak on q3 dm4ish came from it)
+// with B = kFaceBlendBand. Where the result is still blind (b of T's weights and the blended v above 0),
+// the pass runs again with B = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) b: the
+// neighbours' sight reaches through the whole of a tet whose own data sees nothing, instead of the
+// fallback's guess. Every term is a continuous function of x (the second pass's band too: T's weights of
+// an off-face probe vanish on the face), so the light is continuous across every face, edge and corner.
+// Where no other tet reaches x (deep inside T) v is unchanged; where only T holds p, v_p is
+// unchanged; where every tet holding p sees it at exactly 1, v_p = 1 exactly.
+//
+// The tets are found breadth first from T across faces, taking a tet that holds one of T's blended probes
+// and reaches x (omega > 0), at most kFaceBlendMaxTets looked at (a corner's star: about 20); T's own face
+// neighbour N_k only where x lies within N_k's band of the face (w_k < B H_N / H_T, the height ratio read
+// from N_k's vertex off the face in T's frame; beyond it omega_N is 0).
+// Every tet looked at holds one of T's probes: a streamed sector therefore carries the tets sharing a probe
+// with its own (tetra/stream_index.h). Only visibility is fetched from
+// the other tets (frame, occlusion record; no SH). Cost and figures: docs/occlusion.md.
+// Points outside the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe_face_blend.glsl
 // (tetraprobeFaceBlendVisibility). Permissive: standard library and GLM only.
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -53,38 +59,58 @@
 
 namespace tetraprobe {
 
-inline constexpr float kFaceBlendBand = 0.15f;          // band half-width, barycentric (of the thinner tet)
-inline constexpr float kFaceBlendFallbackTrust = 0.1f;  // t of a side that sees none of its probes
-inline constexpr float kFaceBlendBlindSum = 0.05f;      // visible weight sum from which a side is not blind
-inline constexpr float kFaceBlendFallbackBand = 0.3f;   // the band where the tet's own data sees nothing
-                                                        // (past the centroid's 0.25: the whole tet)
+inline constexpr float kFaceBlendBand = 0.15f;          // B: band width, barycentric (of the tet reaching)
+inline constexpr float kFaceBlendFallbackTrust = 0.1f;  // tau of a tet that sees none of its probes
+inline constexpr float kFaceBlendBlindSum = 0.05f;      // visible weight sum from which a tet is not blind
+inline constexpr float kFaceBlendFallbackBand = 0.3f;   // the band where the point is blind after the first
+                                                        // pass (past the centroid's 0.25: the whole tet)
+inline constexpr int kFaceBlendMaxTets = 48;            // tets the search looks at, the point's own included
+inline constexpr int kFaceBlendStarTets = 256;          // tets faceBlendProbeFlag walks around one probe
 
-// Which faces the blend consults. kFaceBlendFlaggedFaces (what the lookup does, CPU and GPU): only the
-// faces faceBlendFaceFlag sets, the same answer bit for bit as kFaceBlendEveryFace (every face, the rule
-// without the flag; for tests that prove it: tests/runtime/test_face_blend.cpp).
-enum FaceBlendFaces { kFaceBlendFlaggedFaces, kFaceBlendEveryFace };
+// Which probes the blend computes. kFaceBlendEveryProbe: all four (the CPU lookup). kFaceBlendFlaggedProbes:
+// only those faceBlendMask flags (what the GPU does, the flags packed at upload), the same answer bit for
+// bit (tests/occlusion/test_shade.cpp proves it).
+enum FaceBlendProbes { kFaceBlendEveryProbe, kFaceBlendFlaggedProbes };
 
 // The blend above for a point at local-frame `local` (normal as occlusionVisibility takes it) inside tet
 // `tet` (a valid index; not for points outside the hull) with located weights `weights` (non-negative,
 // summing to 1) and the tet's own visibility `visibility` (occlusionVisibility). Returns `visibility`
-// unchanged where no face qualifies (every w_k at least the band). Finite for finite input.
+// unchanged where no other tet reaches the point. Finite for finite input.
 glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
                               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
-                              const glm::vec3& normal, FaceBlendFaces faces = kFaceBlendFlaggedFaces);
+                              const glm::vec3& normal, FaceBlendProbes which = kFaceBlendEveryProbe);
 
-// The face flag, a static property of the level computed at upload (packed into the GPU's occlusion record,
-// gpu_layout.h): true when the blend across face k of `tet` may change a visibility, false where it cannot:
-// a hull face (no neighbour), or a face whose three probes both sides see at exactly 1.0 wherever their data
-// is evaluated (no data; one plane whose cells all see the probe; a shadow map of the probe that meets
-// nothing), where every target of the blend is 1 and so equals the visibility it would move. Which faces do
-// blend where the flag is set is still decided per point (the band, a neighbour without data where this tet
-// sees every probe). faceBlendMask: the four flags, bit k for face k (0 for an index out of range).
-bool faceBlendFaceFlag(const Level& level, const LevelOcclusion& occlusion, int32_t tet, int k);
+// The probe flag, a static property of the level computed at upload (packed into the GPU's occlusion record,
+// gpu_layout.h): true when some tet holding probe tet.v[i] (its star, walked across faces) may hide it,
+// false where every such tet sees it at exactly 1.0 wherever its data is evaluated (no data; one plane whose
+// cells all see the probe; a shadow map of the probe that meets nothing), so the blend cannot move it; true
+// too when the star has more than kFaceBlendStarTets tets. faceBlendMask: the four flags, bit i for probe
+// slot i (0 for an index out of range).
+bool faceBlendProbeFlag(const Level& level, const LevelOcclusion& occlusion, int32_t tet, int i);
 uint32_t faceBlendMask(const Level& level, const LevelOcclusion& occlusion, int32_t tet);
+
+// faceBlendMask of every tet at once, in time linear in the tets (a probe's flag from every tet holding it;
+// a probe held by more than kFaceBlendStarTets tets flagged): the same masks as faceBlendMask where every
+// probe's star is connected across its faces, as in any level the bake writes (the upload packs these).
+std::vector<uint8_t> faceBlendMasks(const Level& level, const LevelOcclusion& occlusion);
+
+// Whether tet `tet` may take part in the blend (omega > 0) at some point of the box [lo, hi] (local frame,
+// metres) at the widest band (kFaceBlendFallbackBand, plus 1 % for the run time's float rounding). The
+// region where omega > 0 is convex, the intersection of the 15 half-spaces -sum_{g in P} w_g < band over
+// the non-empty sets P of the tet's vertices; false only where the box lies wholly outside one of them or
+// outside the region's own box (from its vertices). Conservative: true for a flat tet.
+// A streamed sector carries the tets sharing a probe with its own that may reach its cell
+// (tetra/stream_index.h), so a loaded sector answers as the full level does.
+bool faceBlendMayReach(const Level& level, int32_t tet, const glm::dvec3& lo, const glm::dvec3& hi);
+
+// The tets holding probe tet.v[i] that a walk across the faces holding it reaches from `tet` (its star; tet
+// first), at most kFaceBlendStarTets: the tets whose probe flags change when one of them changes (a GPU
+// sector pool rewrites them when a sector is linked or cut). Empty for an index out of range.
+std::vector<int32_t> faceBlendStar(const Level& level, int32_t tet, int i);
 
 // The visibility of the located tet's probes the run-time lookup uses (shadeLocated, shade.h;
 // tetraprobeLookupVisibility), from the tet's own `visibility` (occlusionVisibility at `local`, `normal`):
-// blended near faces by faceBlendVisibility when the point is inside the hull (loc.outerCell < 0), else
+// blended by faceBlendVisibility when the point is inside the hull (loc.outerCell < 0), else
 // unchanged (outside the hull, no tet, or a level without occlusion).
 glm::vec4 lookupVisibility(const Level& level, const LevelOcclusion& occlusion, const Location& loc,
                            const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal);

@@ -135,9 +135,9 @@ static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t), "TetraprobeCells: 4 ints 
 
 // TetraprobeOcclusion (binding + 5): the level's per-tet occlusion (occlusion.h), packed into one uint array
 // after this header, in less than the CPU's LevelOcclusion holds (gpuOcclusionBytes):
-// - data[t]: tet t's header, TetOcclusion's repacked to hold the face flags of the blend (face_blend.h,
-//   faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3), face mask
-//   (4-7, bit 4 + k for face k), offset (from bit 8, below 2^24; the upload refuses more).
+// - data[t]: tet t's header, TetOcclusion's repacked to hold the probe flags of the blend (face_blend.h,
+//   faceBlendMask) between the plane count and the offset: kind (bits 0-1), plane count (2-3), probe mask
+//   (4-7, bit 4 + i for probe slot i), offset (from bit 8, below 2^24; the upload refuses more).
 // - Plane tets: from planeOffset, one block each: the tet's `cells` word, then its planes (2 uints each:
 //   four snorm16, c[0] | c[1] << 16, c[2] | c[3] << 16); the header's offset is the block's first uint,
 //   counted from planeOffset. Only plane tets carry a `cells` word (the CPU's 8-byte record gives every
@@ -146,11 +146,11 @@ static_assert(sizeof(CellSlot) == 4 * sizeof(int32_t), "TetraprobeCells: 4 ints 
 //   little-endian bytes), as TetOcclusion's.
 // tetCount 0: the level has none (a tiny dummy buffer; the shader skips the evaluation).
 inline constexpr uint32_t kGpuOccRecordUints = 1;
-inline constexpr uint32_t kGpuOccFaceMaskShift = 4;
+inline constexpr uint32_t kGpuOccProbeMaskShift = 4;
 inline constexpr uint32_t kGpuOccOffsetShift = 8;
 inline constexpr uint32_t kGpuOccMaxOffset = (1u << (32 - kGpuOccOffsetShift)) - 1u;
-inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t faceMask, uint32_t offset) {
-  return uint32_t(rec.kind()) | rec.planeCount() << 2 | (faceMask & 15u) << kGpuOccFaceMaskShift |
+inline uint32_t gpuOcclusionHeader(const TetOcclusion& rec, uint32_t probeMask, uint32_t offset) {
+  return uint32_t(rec.kind()) | rec.planeCount() << 2 | (probeMask & 15u) << kGpuOccProbeMaskShift |
          offset << kGpuOccOffsetShift;
 }
 

@@ -133,6 +133,7 @@ class GpuSectorPool {
   void markDirty(uint32_t binding, uint64_t offset, uint64_t bytes);
   void writeTet(int32_t slot);
   void writeOcclusionHeader(int32_t slot);
+  void writeStarHeaders(const std::vector<int32_t>& slots);
   void writeProbe(int32_t slot);
   void writeBrick(int32_t brick, const std::vector<int32_t>& startTets);
   void writeCellSlot(size_t h);
