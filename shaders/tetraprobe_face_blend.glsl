@@ -31,12 +31,27 @@ float tetraprobeFaceTrust(float blind) {  // tau: the trust in a tet
   return r;
 }
 
-// omega of a tet whose weights at the point are w, for band `band`: 1 inside it, fading to 0 as the
-// weights below 0 sum to -band.
-float tetraprobeFaceReach(vec4 w, float band) {
+// omega of tet s (frame f, weights w at the point) for band `band`: 1 inside s, fading to 0 as its weights below
+// 0 sum to -band, each past face counted in the thinner of s and the tet across it (`thinner`, the first
+// pass) or in s's own units (the blind pass).
+float tetraprobeFaceReach(int s, TetraprobeBaryFrame f, vec4 w, float band, bool thinner) {
+  ivec4 sv = tetraprobeTetVertices(s), sn = tetraprobeTetNeighbours(s);
   precise float d = 0.0;
-  for (int g = 0; g < 4; ++g)
-    if (w[g] < 0.0) d = d + -w[g] / band;
+  for (int g = 0; g < 4; ++g) {
+    if (!(w[g] < 0.0)) continue;
+    precise float ratio = 1.0;
+    int m = sn[g];
+    if (thinner && m >= 0) {
+      ivec4 mv = tetraprobeTetVertices(m);
+      int j = 0;
+      while (j < 4 && (mv[j] == sv.x || mv[j] == sv.y || mv[j] == sv.z || mv[j] == sv.w)) ++j;
+      if (j < 4) {
+        precise float wq = tetraprobeBaryWeights(f, tetraprobeProbePosition(mv[j]))[g];
+        if (wq < 0.0 && -1.0 / wq > 1.0) ratio = -1.0 / wq;
+      }
+    }
+    d = d + -w[g] * ratio / band;
+  }
   if (!(d < 1.0)) return 0.0;  // beyond the band, or not finite
   precise float omega = 1.0 - d * d * (3.0 - 2.0 * d);
   return omega;
@@ -51,7 +66,7 @@ struct TetraprobeBlendSums {
   float maxBlind;
 };
 TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame ownFrame, vec4 weights,
-                                            vec4 vis, vec3 x, vec3 n, float band, uint probes) {
+                                            vec4 vis, vec3 x, vec3 n, float band, uint probes, bool thinner) {
   TetraprobeBlendSums s;
   float ownBlind = tetraprobeFaceBlindness(weights, vis);
   float ownTrust = tetraprobeFaceTrust(ownBlind);
@@ -65,7 +80,7 @@ TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame
     s.count[i] = 0;
   }
   // Breadth first across faces: a tet that reaches the point lists its neighbour M across face k when M holds
-  // a blended probe and the point lies within M's band of the face (face_blend.cpp, blendPass).
+  // a blended probe and may reach the point (face_blend.cpp, blendPass).
   int tried[TETRAPROBE_FACE_MAX_TETS];
   int count = 0, head = 1;
   tried[count++] = t;
@@ -76,7 +91,7 @@ TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame
     ivec4 uv = tetraprobeTetVertices(u), un = tetraprobeTetNeighbours(u);
     for (int k = 0; k < 4; ++k) {
       int m = un[k];
-      if (m < 0) continue;
+      if (m < 0 || (thinner && !(wu[k] < band))) continue;
       bool seen = false;
       for (int q = 0; q < count && !seen; ++q) seen = tried[q] == m;
       if (seen) continue;
@@ -86,12 +101,14 @@ TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame
         if (((probes >> uint(i)) & 1u) != 0u)
           for (int j = 0; j < 4; ++j) holds = holds || mv[j] == tv[i];
       if (!holds) continue;
-      int j = 0;  // M's vertex off the shared face
-      while (j < 4 && (mv[j] == uv.x || mv[j] == uv.y || mv[j] == uv.z || mv[j] == uv.w)) ++j;
-      if (j < 4) {
-        float far = tetraprobeBaryWeights(fu, tetraprobeProbePosition(mv[j]))[k];
-        precise float limit = band * -far;
-        if (!(wu[k] < limit)) continue;
+      if (!thinner) {
+        int j = 0;  // M's vertex off the shared face
+        while (j < 4 && (mv[j] == uv.x || mv[j] == uv.y || mv[j] == uv.z || mv[j] == uv.w)) ++j;
+        if (j < 4) {
+          float far = tetraprobeBaryWeights(fu, tetraprobeProbePosition(mv[j]))[k];
+          precise float limit = band * -far;
+          if (!(wu[k] < limit)) continue;
+        }
       }
       if (count == TETRAPROBE_FACE_MAX_TETS) return s;  // the list is full: what was found so far
       tried[count++] = m;
@@ -103,7 +120,7 @@ TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame
       ivec4 nv = tetraprobeTetVertices(nb);
       TetraprobeBaryFrame f = tetraprobeBaryFrame(nb);
       vec4 w = tetraprobeBaryWeights(f, x);
-      float omega = tetraprobeFaceReach(w, band);
+      float omega = tetraprobeFaceReach(nb, f, w, band, thinner);
       if (!(omega > 0.0)) continue;
       vec4 v = tetraprobeOccKind(nb) == 0u ? vec4(1.0) : tetraprobeOccVisibilityInFrame(nb, f, x, n);
       float blind = tetraprobeFaceBlindness(w, v);
@@ -156,15 +173,17 @@ vec4 tetraprobeFaceBlendVisibility(int t, TetraprobeBaryFrame frame, vec4 weight
   ivec4 tv = tetraprobeTetVertices(t);
   vec4 front = tetraprobeProbeFront(t, x, n);
   vec4 o = tetraprobeFaceBlendResolve(
-      tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, TETRAPROBE_FACE_BAND, probes), vis, front,
+      tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, TETRAPROBE_FACE_BAND, probes, true), vis, front,
       probes);
-  // Where the blend still sees nothing, a wider band: the neighbours' sight reaches deeper into the tet.
+  // Where that still sees nothing, a wider band in each reaching tet's own units, blended in by the blindness.
   float blind = tetraprobeFaceBlindness(weights, o);
   if (blind > 0.0) {
     precise float band =
         TETRAPROBE_FACE_BAND + (TETRAPROBE_FACE_FALLBACK_BAND - TETRAPROBE_FACE_BAND) * blind;
-    o = tetraprobeFaceBlendResolve(tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, band, probes), vis,
-                                   front, probes);
+    vec4 wide = tetraprobeFaceBlendResolve(
+        tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, band, probes, false), vis, front, probes);
+    precise vec4 r = o + blind * (wide - o);
+    o = r;
   }
   return o;
 }

@@ -68,11 +68,28 @@ bool mayHide(const LevelOcclusion& occlusion, int32_t tet, int i) {
   return false;
 }
 
-// omega_S of the header for weights wS of tet S at the point, with band `band`.
-float reach(const glm::vec4& wS, float band) {
+// omega_S of the header for tet s (frame f, weights wS at the point), with band `band`; each face's depth in
+// the thinner tet's units (the first pass) or in S's own (the blind pass).
+float reach(const Level& level, int32_t s, const BaryFrame& f, const glm::vec4& wS, float band,
+            bool thinner) {
+  const Tet& t = level.tets[size_t(s)];
   float d = 0.0f;
-  for (int g = 0; g < 4; ++g)
-    if (wS[g] < 0.0f) d += -wS[g] / band;
+  for (int g = 0; g < 4; ++g) {
+    if (!(wS[g] < 0.0f)) continue;
+    // The height ratio H_S / H_M over face g: M's vertex off the face lies at S's weight -H_M / H_S.
+    float ratio = 1.0f;
+    const int32_t m = t.n[g];
+    if (thinner && validTet(level, m)) {
+      const Tet& tm = level.tets[size_t(m)];
+      int j = 0;
+      while (j < 4 && (tm.v[j] == t.v[0] || tm.v[j] == t.v[1] || tm.v[j] == t.v[2] || tm.v[j] == t.v[3])) ++j;
+      if (j < 4) {
+        const float wq = baryWeights(f, level.probes[size_t(tm.v[j])])[g];
+        if (wq < 0.0f && -1.0f / wq > 1.0f) ratio = -1.0f / wq;
+      }
+    }
+    d += -wS[g] * ratio / band;
+  }
   if (!(d < 1.0f)) return 0.0f;  // beyond the band, or not finite
   return 1.0f - d * d * (3.0f - 2.0f * d);
 }
@@ -88,7 +105,7 @@ struct Sums {
 
 Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet, const glm::vec4& weights,
                const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal, float band,
-               uint32_t probes) {
+               uint32_t probes, bool thinner) {
   const Tet& t = level.tets[size_t(tet)];
   Sums s;
   const float ownBlind = blindness(weights, visibility);
@@ -102,20 +119,21 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
   }
   // Breadth first from the point's tet across faces. A tet U that reaches the point (omega > 0; the point's
   // own tet first) puts its neighbour M across face k on the list when M holds one of the blended probes and
-  // may reach the point: the point's depth on U's side of the face, w_U,k H_U, below band H_M, where M's
-  // vertex off the face lies at w_U,k = -H_M / H_U (beyond, M's own weight there is below -band: omega_M 0),
-  // so only tets near the point's faces, edges and corners are framed. tried[] holds every tet listed.
+  // may reach the point: the point lies within a band of the face on U's side, in the thinner tet's units
+  // (first pass: w_U,k < band, a test on weights U has) or in M's (blind pass: w_U,k < band H_M / H_U, where
+  // M's vertex off the face lies at w_U,k = -H_M / H_U); beyond, omega_M is 0. So only tets near the point's
+  // faces, edges and corners are framed. tried[] holds every tet listed.
   int32_t tried[kFaceBlendMaxTets];
   int n = 0, head = 1;
   tried[n++] = tet;
   int32_t u = tet;
   BaryFrame fu = baryFrame(t, level.probes);
-  glm::vec4 wu = baryWeights(fu, local);
+  glm::vec4 wu = baryWeights(fu, local);  // raw, as every other tet's
   for (;;) {
     const Tet& tu = level.tets[size_t(u)];
     for (int k = 0; k < 4; ++k) {
       const int32_t m = tu.n[k];
-      if (!validTet(level, m)) continue;
+      if (!validTet(level, m) || (thinner && !(wu[k] < band))) continue;
       bool seen = false;
       for (int q = 0; q < n && !seen; ++q) seen = tried[q] == m;
       if (seen) continue;
@@ -125,12 +143,12 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
         if ((probes >> i) & 1u)
           for (int j = 0; j < 4; ++j) holds = holds || tm.v[j] == t.v[i];
       if (!holds) continue;
-      int j = 0;  // M's vertex off the shared face
-      while (j < 4 && (tm.v[j] == tu.v[0] || tm.v[j] == tu.v[1] || tm.v[j] == tu.v[2] || tm.v[j] == tu.v[3]))
-        ++j;
-      if (j < 4) {
-        const float far = baryWeights(fu, level.probes[size_t(tm.v[j])])[k];
-        if (!(wu[k] < band * -far)) continue;
+      if (!thinner) {
+        int j = 0;  // M's vertex off the shared face
+        while (j < 4 &&
+               (tm.v[j] == tu.v[0] || tm.v[j] == tu.v[1] || tm.v[j] == tu.v[2] || tm.v[j] == tu.v[3]))
+          ++j;
+        if (j < 4 && !(wu[k] < band * -baryWeights(fu, level.probes[size_t(tm.v[j])])[k])) continue;
       }
       if (n == kFaceBlendMaxTets) return s;  // the list is full: what was found so far
       tried[n++] = m;
@@ -142,7 +160,7 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
       const Tet& tn = level.tets[size_t(nb)];
       const BaryFrame f = baryFrame(tn, level.probes);
       const glm::vec4 w = baryWeights(f, local);
-      const float omega = reach(w, band);
+      const float omega = reach(level, nb, f, w, band, thinner);
       if (!(omega > 0.0f)) continue;
       const glm::vec4 v = kindOf(occlusion, nb) == kOcclusionNone
                               ? glm::vec4(1.0f)
@@ -322,15 +340,19 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
   glm::vec3 toProbe[4];
   for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
   const glm::vec4 front = probeFront(toProbe, normal);
-  glm::vec4 out =
-      resolve(blendPass(level, occlusion, tet, weights, visibility, local, normal, kFaceBlendBand, probes),
-              visibility, front, probes);
+  glm::vec4 out = resolve(
+      blendPass(level, occlusion, tet, weights, visibility, local, normal, kFaceBlendBand, probes, true),
+      visibility, front, probes);
   // Where the blend still sees nothing, a wider band: the neighbours' sight reaches deeper into the tet.
+  // Where that still sees nothing, a wider band in each reaching tet's own units, blended in by the
+  // blindness b: a larger neighbour's sight reaches through the whole of a small blind tet.
   const float blind = blindness(weights, out);
   if (blind > 0.0f) {
     const float band = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) * blind;
-    out = resolve(blendPass(level, occlusion, tet, weights, visibility, local, normal, band, probes),
-                  visibility, front, probes);
+    const glm::vec4 wide =
+        resolve(blendPass(level, occlusion, tet, weights, visibility, local, normal, band, probes, false),
+                visibility, front, probes);
+    out = out + blind * (wide - out);
   }
   return out;
 }

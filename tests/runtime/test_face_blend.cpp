@@ -157,9 +157,9 @@ TEST(FaceBlend, UnflaggedProbeWithDataChangesNoVisibility) {
 }
 
 // A tet whose own data hides all four probes (it falls back) looks for light its neighbour sees deeper in:
-// where the first pass leaves it blind, the band widens to kFaceBlendFallbackBand. The band is in tet 1's
-// units (it reaches into tet 0): its height over the shared face is 1.3 m, tet 0's 1 m, so the walk
-// parameter t below is the depth in metres.
+// where the first pass (depths in the thinner tet's units: tet 0's, 1 m over the shared face) leaves it
+// blind, the blind pass reaches with kFaceBlendFallbackBand in the reaching tet's own units (tet 1's height
+// over the face is 1.3 m). The walk parameter t below is the depth in metres.
 TEST(FaceBlend, ATetThatSeesNothingTakesItsNeighboursSightDeeper) {
   Level level = twoTets();
   level.occlusion = hideFaceProbesInTet0();

@@ -1,6 +1,6 @@
 // Streaming index (stream_index.h): sectors from the cell grid's occupied cells, each holding the tets whose
 // bounding boxes touch the cell (grown by a margin) and the tets sharing a probe with one that the face blend
-// may consult there, their probes and the cell's
+// may consult there with their face neighbours, their probes and the cell's
 // BSP renumbered from 0; and a coarse probe set (one probe per coarse cube, nearest its centre) tetrahedralized with CGAL Delaunay. Layout
 // in docs/level_format.md (section STRM).
 #include "tetraprobe/tetra/stream_index.h"
@@ -165,6 +165,11 @@ std::vector<uint8_t> buildStreamIndex(const Level& level, const StreamIndexOptio
     ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
     for (uint32_t t : ring)
       if (faceBlendMayReach(level, int32_t(t), cellLo, cellHi)) d.tets.push_back(t);
+    // A reaching tet's weight reads the tet across each face the point lies past (its height): those join too.
+    const size_t reaching = d.tets.size();
+    for (size_t i = 0; i < reaching; ++i)
+      for (int32_t nb : level.tets[d.tets[i]].n)
+        if (nb >= 0) d.tets.push_back(uint32_t(nb));
     std::sort(d.tets.begin(), d.tets.end());
     d.tets.erase(std::unique(d.tets.begin(), d.tets.end()), d.tets.end());
     for (uint32_t t : d.tets)

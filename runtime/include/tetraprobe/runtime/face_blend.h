@@ -9,12 +9,15 @@
 // tets around an edge) and at corners (the star of a vertex).
 //
 // For the point x in tet T with located weights w and own visibility v, and each probe p of T:
-//   omega_S(x) = 1 - smoothstep(0, 1, d),  d = sum over S's weights w_S,g(x) < 0 of -w_S,g(x) / B
-//                                             (S's barycentric weights extrapolated: 1 on and inside S,
-//                                             falling to 0 one band out past a face, B of S's height over
-//                                             it, sooner near its edges and corners; so a sliver's data is
-//                                             never extrapolated far, and the region where omega_S > 0 is
-//                                             the tet grown by a fixed share of itself)
+//   omega_S(x) = 1 - smoothstep(0, 1, d),  d = sum over S's weights w_S,g(x) < 0 of
+//                -w_S,g(x) max(1, H_S,g / H_M,g) / B
+//                                             (S's barycentric weights extrapolated, H_S,g and H_M,g the
+//                                             heights of S and of the tet M across face g over it, read from
+//                                             M's vertex off the face: the depth past the face counts in the
+//                                             thinner tet's units, so a tet's data reaches at most a band of
+//                                             the thinner tet past a face; a hull face: ratio 1. 1 on and
+//                                             inside S, 0 one band out, sooner near its edges and corners; a
+//                                             sliver's data never reaches far)
 //   b_S = 1 - smoothstep(0, kFaceBlendBlindSum, s_S)   (blindness: s_S the visible weight sum applyOcclusion
 //                                             computes from S's weights and visibility at x; 1 where S sees
 //                                             none of its probes; gentler than the fallback's share so float
@@ -28,21 +31,22 @@
 //                                             never raised above the lowest tet's visibility, unless a tet is
 //                                             blind, where any light it sees beats the fallback's guess; a
 //                                             ceiling's leak on q3 dm4ish came from it)
-// with B = kFaceBlendBand. Where the result is still blind (b of T's weights and the blended v above 0),
-// the pass runs again with B = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) b: the
-// neighbours' sight reaches through the whole of a tet whose own data sees nothing, instead of the
-// fallback's guess. Every term is a continuous function of x (the second pass's band too: T's weights of
-// an off-face probe vanish on the face), so the light is continuous across every face, edge and corner.
-// Where no other tet reaches x (deep inside T) v is unchanged; where only T holds p, v_p is
-// unchanged; where every tet holding p sees it at exactly 1, v_p = 1 exactly.
+// with B = kFaceBlendBand. Where the result is still blind (b, from T's weights and the blended v, above 0)
+// a second pass runs with B' = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) b and each depth in
+// the reaching tet's own units (ratio 1), and is mixed in by b: v <- v + b (v' - v). So a larger
+// neighbour's sight reaches through the whole of a small tet whose own data sees nothing, instead of the
+// fallback's guess. Every term is a continuous function of x (b and B' too: T's weights of an off-face
+// probe vanish on the face), so the light is continuous across every face, edge and corner. Where no other
+// tet reaches x (deep inside T) v is unchanged; where only T holds p, v_p is unchanged; where every tet
+// holding p sees it at exactly 1, v_p = 1 exactly.
 //
 // The tets are found breadth first from T across faces, taking a tet that holds one of T's blended probes
-// and reaches x (omega > 0), at most kFaceBlendMaxTets looked at (a corner's star: about 20); T's own face
-// neighbour N_k only where x lies within N_k's band of the face (w_k < B H_N / H_T, the height ratio read
-// from N_k's vertex off the face in T's frame; beyond it omega_N is 0).
-// Every tet looked at holds one of T's probes: a streamed sector therefore carries the tets sharing a probe
-// with its own (tetra/stream_index.h). Only visibility is fetched from
-// the other tets (frame, occlusion record; no SH). Cost and figures: docs/occlusion.md.
+// and reaches x (omega > 0), at most kFaceBlendMaxTets looked at (a corner's star: about 20). A reaching tet
+// U lists its neighbour M across face k only where M may reach x: in the first pass where w_U,k(x) < B (the
+// thinner-tet depth makes omega_M 0 beyond, a test on weights U has), in the blind pass where
+// w_U,k(x) < B' H_M / H_U (read from M's vertex off the face). So deep inside T nothing else is read. Only
+// visibility is fetched from the other tets (frame, occlusion record; no SH). Cost and figures:
+// docs/occlusion.md and docs/accuracy.md.
 // Points outside the hull (outer cells) are not blended. Mirrored in shaders/tetraprobe_face_blend.glsl
 // (tetraprobeFaceBlendVisibility). Permissive: standard library and GLM only.
 #pragma once
@@ -99,8 +103,9 @@ std::vector<uint8_t> faceBlendMasks(const Level& level, const LevelOcclusion& oc
 // region where omega > 0 is convex, the intersection of the 15 half-spaces -sum_{g in P} w_g < band over
 // the non-empty sets P of the tet's vertices; false only where the box lies wholly outside one of them or
 // outside the region's own box (from its vertices). Conservative: true for a flat tet.
-// A streamed sector carries the tets sharing a probe with its own that may reach its cell
-// (tetra/stream_index.h), so a loaded sector answers as the full level does.
+// The region with the thinner-tet depth lies inside this one. A streamed sector carries the tets sharing a
+// probe with its own that may reach its cell and their face neighbours (whose heights omega reads;
+// tetra/stream_index.h), so a loaded sector answers as the full level does.
 bool faceBlendMayReach(const Level& level, int32_t tet, const glm::dvec3& lo, const glm::dvec3& hi);
 
 // The tets holding probe tet.v[i] that a walk across the faces holding it reaches from `tet` (its star; tet

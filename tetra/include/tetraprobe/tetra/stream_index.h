@@ -1,7 +1,7 @@
 // The streaming index of a level (the optional STRM section, docs/level_format.md; read by the runtime's
 // StreamingLevel, runtime/streaming.h): per sector (one occupied cell of the level's cell grid) the tets
 // whose bounding boxes touch the cell and the tets sharing a probe with one that the run time's face blend
-// may read in the cell (faceBlendMayReach),
+// may read in the cell (faceBlendMayReach) and their face neighbours,
 // their probes and the cell's BSP nodes, plus a coarse probe set
 // tetrahedralized here for the regions not loaded. Build side (CGAL Delaunay for the coarse set).
 #pragma once
