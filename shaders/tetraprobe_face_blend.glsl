@@ -31,6 +31,14 @@ float tetraprobeFaceTrust(float blind) {  // tau: the trust in a tet
   return r;
 }
 
+// The slot of tet m's vertex (of mv) that tet s (sv) does not hold: m's vertex off their shared face; 4 when
+// there is none (offFaceSlot in face_blend.cpp).
+int tetraprobeOffFaceSlot(ivec4 mv, ivec4 sv) {
+  int j = 0;
+  while (j < 4 && (mv[j] == sv.x || mv[j] == sv.y || mv[j] == sv.z || mv[j] == sv.w)) ++j;
+  return j;
+}
+
 // omega of tet s (frame f, weights w at the point) for band `band`: 1 inside s, fading to 0 as its weights below
 // 0 sum to -band, each past face counted in the thinner of s and the tet across it (`thinner`, the first
 // pass) or in s's own units (the blind pass).
@@ -43,8 +51,7 @@ float tetraprobeFaceReach(int s, TetraprobeBaryFrame f, vec4 w, float band, bool
     int m = sn[g];
     if (thinner && m >= 0) {
       ivec4 mv = tetraprobeTetVertices(m);
-      int j = 0;
-      while (j < 4 && (mv[j] == sv.x || mv[j] == sv.y || mv[j] == sv.z || mv[j] == sv.w)) ++j;
+      int j = tetraprobeOffFaceSlot(mv, sv);
       if (j < 4) {
         precise float wq = tetraprobeBaryWeights(f, tetraprobeProbePosition(mv[j]))[g];
         if (wq < 0.0 && -1.0 / wq > 1.0) ratio = -1.0 / wq;
@@ -102,8 +109,7 @@ TetraprobeBlendSums tetraprobeFaceBlendPass(int t, ivec4 tv, TetraprobeBaryFrame
           for (int j = 0; j < 4; ++j) holds = holds || mv[j] == tv[i];
       if (!holds) continue;
       if (!thinner) {
-        int j = 0;  // M's vertex off the shared face
-        while (j < 4 && (mv[j] == uv.x || mv[j] == uv.y || mv[j] == uv.z || mv[j] == uv.w)) ++j;
+        int j = tetraprobeOffFaceSlot(mv, uv);
         if (j < 4) {
           float far = tetraprobeBaryWeights(fu, tetraprobeProbePosition(mv[j]))[k];
           precise float limit = band * -far;
@@ -173,8 +179,8 @@ vec4 tetraprobeFaceBlendVisibility(int t, TetraprobeBaryFrame frame, vec4 weight
   ivec4 tv = tetraprobeTetVertices(t);
   vec4 front = tetraprobeProbeFront(t, x, n);
   vec4 o = tetraprobeFaceBlendResolve(
-      tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, TETRAPROBE_FACE_BAND, probes, true), vis, front,
-      probes);
+      tetraprobeFaceBlendPass(t, tv, frame, weights, vis, x, n, TETRAPROBE_FACE_BAND, probes, true), vis,
+      front, probes);
   // Where that still sees nothing, a wider band in each reaching tet's own units, blended in by the blindness.
   float blind = tetraprobeFaceBlindness(weights, o);
   if (blind > 0.0) {
@@ -202,7 +208,8 @@ vec4 tetraprobeLookupVisibility(TetraprobeLocation loc, vec3 x, vec3 n) {
   if (probes == 0u) return tetraprobeOccVisibility(loc.tet, x, n);
   // The tet's frame once, for its own data and the blend.
   TetraprobeBaryFrame frame = tetraprobeBaryFrame(loc.tet);
-  vec4 vis = tetraprobeOccKind(loc.tet) == 0u ? vec4(1.0) : tetraprobeOccVisibilityInFrame(loc.tet, frame, x, n);
+  vec4 vis =
+      tetraprobeOccKind(loc.tet) == 0u ? vec4(1.0) : tetraprobeOccVisibilityInFrame(loc.tet, frame, x, n);
   return tetraprobeFaceBlendVisibility(loc.tet, frame, loc.weights, vis, x, n, probes);
 }
 

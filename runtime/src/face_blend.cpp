@@ -68,6 +68,21 @@ bool mayHide(const LevelOcclusion& occlusion, int32_t tet, int i) {
   return false;
 }
 
+// The slot of tet m's vertex that tet s does not hold (m and s sharing a face: m's vertex off that face); 4
+// when there is none.
+int offFaceSlot(const Tet& m, const Tet& s) {
+  int j = 0;
+  while (j < 4 && (m.v[j] == s.v[0] || m.v[j] == s.v[1] || m.v[j] == s.v[2] || m.v[j] == s.v[3])) ++j;
+  return j;
+}
+
+// The slot of probe p in tet t; 4 when t does not hold it.
+int slotOf(const Tet& t, int32_t p) {
+  int slot = 0;
+  while (slot < 4 && t.v[slot] != p) ++slot;
+  return slot;
+}
+
 // omega_S of the header for tet s (frame f, weights wS at the point), with band `band`; each face's depth in
 // the thinner tet's units (the first pass) or in S's own (the blind pass).
 float reach(const Level& level, int32_t s, const BaryFrame& f, const glm::vec4& wS, float band,
@@ -81,8 +96,7 @@ float reach(const Level& level, int32_t s, const BaryFrame& f, const glm::vec4& 
     const int32_t m = t.n[g];
     if (thinner && validTet(level, m)) {
       const Tet& tm = level.tets[size_t(m)];
-      int j = 0;
-      while (j < 4 && (tm.v[j] == t.v[0] || tm.v[j] == t.v[1] || tm.v[j] == t.v[2] || tm.v[j] == t.v[3])) ++j;
+      const int j = offFaceSlot(tm, t);
       if (j < 4) {
         const float wq = baryWeights(f, level.probes[size_t(tm.v[j])])[g];
         if (wq < 0.0f && -1.0f / wq > 1.0f) ratio = -1.0f / wq;
@@ -103,9 +117,9 @@ struct Sums {
   float maxBlind = 0.0f;
 };
 
-Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet, const glm::vec4& weights,
-               const glm::vec4& visibility, const glm::vec3& local, const glm::vec3& normal, float band,
-               uint32_t probes, bool thinner) {
+Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet, const BaryFrame& ownFrame,
+               const glm::vec4& weights, const glm::vec4& visibility, const glm::vec3& local,
+               const glm::vec3& normal, float band, uint32_t probes, bool thinner) {
   const Tet& t = level.tets[size_t(tet)];
   Sums s;
   const float ownBlind = blindness(weights, visibility);
@@ -127,7 +141,7 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
   int n = 0, head = 1;
   tried[n++] = tet;
   int32_t u = tet;
-  BaryFrame fu = baryFrame(t, level.probes);
+  BaryFrame fu = ownFrame;
   glm::vec4 wu = baryWeights(fu, local);  // raw, as every other tet's
   for (;;) {
     const Tet& tu = level.tets[size_t(u)];
@@ -144,10 +158,7 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
           for (int j = 0; j < 4; ++j) holds = holds || tm.v[j] == t.v[i];
       if (!holds) continue;
       if (!thinner) {
-        int j = 0;  // M's vertex off the shared face
-        while (j < 4 &&
-               (tm.v[j] == tu.v[0] || tm.v[j] == tu.v[1] || tm.v[j] == tu.v[2] || tm.v[j] == tu.v[3]))
-          ++j;
+        const int j = offFaceSlot(tm, tu);
         if (j < 4 && !(wu[k] < band * -baryWeights(fu, level.probes[size_t(tm.v[j])])[k])) continue;
       }
       if (n == kFaceBlendMaxTets) return s;  // the list is full: what was found so far
@@ -170,8 +181,7 @@ Sums blendPass(const Level& level, const LevelOcclusion& occlusion, int32_t tet,
       s.maxBlind = std::max(s.maxBlind, omega * blind);
       for (int i = 0; i < 4; ++i) {
         if (((probes >> i) & 1u) == 0) continue;
-        int slot = 0;
-        while (slot < 4 && tn.v[slot] != t.v[i]) ++slot;
+        const int slot = slotOf(tn, t.v[i]);
         if (slot == 4) continue;
         const float vj = v[slot];
         s.num[i] += wt * vj;
@@ -214,8 +224,7 @@ bool walkStar(const Level& level, int32_t tet, int i, Stop stop) {
   star[n++] = tet;
   for (int head = 0; head < n; ++head) {
     const Tet& u = level.tets[size_t(star[head])];
-    int slot = 0;
-    while (slot < 4 && u.v[slot] != p) ++slot;
+    const int slot = slotOf(u, p);
     if (slot == 4) continue;
     if (stop(star[head], slot)) return true;
     for (int k = 0; k < 4; ++k) {
@@ -340,18 +349,18 @@ glm::vec4 faceBlendVisibility(const Level& level, const LevelOcclusion& occlusio
   glm::vec3 toProbe[4];
   for (int i = 0; i < 4; ++i) toProbe[i] = level.probes[size_t(t.v[i])] - local;
   const glm::vec4 front = probeFront(toProbe, normal);
-  glm::vec4 out = resolve(
-      blendPass(level, occlusion, tet, weights, visibility, local, normal, kFaceBlendBand, probes, true),
-      visibility, front, probes);
-  // Where the blend still sees nothing, a wider band: the neighbours' sight reaches deeper into the tet.
+  const BaryFrame frame = baryFrame(t, level.probes);  // the tet's own, for both passes
+  glm::vec4 out = resolve(blendPass(level, occlusion, tet, frame, weights, visibility, local, normal,
+                                    kFaceBlendBand, probes, true),
+                          visibility, front, probes);
   // Where that still sees nothing, a wider band in each reaching tet's own units, blended in by the
   // blindness b: a larger neighbour's sight reaches through the whole of a small blind tet.
   const float blind = blindness(weights, out);
   if (blind > 0.0f) {
     const float band = kFaceBlendBand + (kFaceBlendFallbackBand - kFaceBlendBand) * blind;
-    const glm::vec4 wide =
-        resolve(blendPass(level, occlusion, tet, weights, visibility, local, normal, band, probes, false),
-                visibility, front, probes);
+    const glm::vec4 wide = resolve(
+        blendPass(level, occlusion, tet, frame, weights, visibility, local, normal, band, probes, false),
+        visibility, front, probes);
     out = out + blind * (wide - out);
   }
   return out;
