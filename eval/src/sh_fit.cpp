@@ -32,7 +32,8 @@ struct Row {
   enum Kind : uint8_t { kFitted, kFallback, kSkipped };
   Kind kind = kSkipped;
   int32_t probe[4] = {0, 0, 0, 0};
-  double a[4][kShCoeffCount] = {};  // w_s A_l(k) Y_k(n)
+  double a[4][kShCoeffCount] = {};     // w_s A_l(k) Y_k(n)
+  double w[4] = {0.0, 0.0, 0.0, 0.0};  // w_s: the lookup's weight of each probe
   glm::dvec3 target{0.0}, weight{0.0};
 };
 
@@ -122,6 +123,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
           const auto y = shBasis<double>(p.normal.x, p.normal.y, p.normal.z);
           for (int s = 0; s < 4; ++s) {
             r.probe[s] = tet.v[s];
+            r.w[s] = double(record.weights[s]);
             for (int k = 0; k < fittedCoeffs; ++k)
               r.a[s][k] = double(record.weights[s]) * shCosineLobe(k) * y[size_t(k)];
           }
@@ -167,87 +169,151 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
     }
   }
 
-  std::vector<double> delta(n * 3, 0.0);  // per channel c: delta[c * n + ...]
+  // The traced SH per channel as the solver's vectors.
+  std::vector<double> x0[3];
   for (int c = 0; c < 3; ++c) {
-    std::vector<double> x0(n);
+    x0[c].resize(n);
     for (size_t j = 0; j < np; ++j)
       for (int k = 0; k < kShCoeffCount; ++k)
-        x0[j * kShCoeffCount + size_t(k)] = double(level.sh[j].c[size_t(k)][c]);
-    // b = A^T W (t - A x0); the Jacobi diagonal of A^T W A + P.
-    std::vector<double> b(n, 0.0), diag = prior;
-    for (const Row& r : rows) {
-      if (r.kind != Row::kFitted) continue;
-      const double res = r.target[c] - rowDot(r, x0);
-      stats.objectiveBefore += r.weight[c] * res * res;
-      rowScatter(r, r.weight[c] * res, b);
-      for (int s = 0; s < 4; ++s)
-        for (int k = 0; k < kShCoeffCount; ++k)
-          diag[size_t(r.probe[s]) * kShCoeffCount + size_t(k)] += r.weight[c] * r.a[s][k] * r.a[s][k];
-    }
-    auto apply = [&](const std::vector<double>& v, std::vector<double>& y) {
-      for (size_t i = 0; i < n; ++i) y[i] = prior[i] * v[i];
-      for (const Row& r : rows)
-        if (r.kind == Row::kFitted) rowScatter(r, r.weight[c] * rowDot(r, v), y);
-    };
-    std::vector<double> d(n, 0.0), res = b, z(n), p(n), q(n);
-    auto precondition = [&](const std::vector<double>& from, std::vector<double>& to) {
-      for (size_t i = 0; i < n; ++i) to[i] = diag[i] > 0.0 ? from[i] / diag[i] : 0.0;
-    };
-    precondition(res, z);
-    p = z;
-    double rz = 0.0;
-    for (size_t i = 0; i < n; ++i) rz += res[i] * z[i];
-    const double rz0 = rz;
-    int it = 0;
-    while (it < options.maxIterations && rz > 0.0 && rz > options.tolerance * options.tolerance * rz0) {
-      apply(p, q);
-      double pq = 0.0;
-      for (size_t i = 0; i < n; ++i) pq += p[i] * q[i];
-      if (!(pq > 0.0)) break;
-      const double alpha = rz / pq;
-      for (size_t i = 0; i < n; ++i) {
-        d[i] += alpha * p[i];
-        res[i] -= alpha * q[i];
-      }
-      precondition(res, z);
-      double rzNew = 0.0;
-      for (size_t i = 0; i < n; ++i) rzNew += res[i] * z[i];
-      const double beta = rzNew / rz;
-      rz = rzNew;
-      for (size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
-      ++it;
-    }
-    stats.iterations[c] = it;
-    std::copy(d.begin(), d.end(), delta.begin() + long(size_t(c) * n));
+        x0[c][j * kShCoeffCount + size_t(k)] = double(level.sh[j].c[size_t(k)][c]);
   }
+
+  // Minimises the objective over the rows `use` selects, with the probes `frozen` marks held at x0 (their
+  // variables left out: the preconditioner and the right-hand side are 0 there, so conjugate gradients stay in
+  // the free subspace). Returns the change per channel c at delta[c * n + ...].
+  auto solve = [&](const std::vector<uint8_t>& use, const std::vector<uint8_t>& frozen, int* iterations) {
+    std::vector<double> delta(n * 3, 0.0);
+    for (int c = 0; c < 3; ++c) {
+      // b = A^T W (t - A x0); the Jacobi diagonal of A^T W A + P.
+      std::vector<double> b(n, 0.0), diag = prior;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        const Row& r = rows[i];
+        if (!use[i]) continue;
+        const double res = r.target[c] - rowDot(r, x0[c]);
+        rowScatter(r, r.weight[c] * res, b);
+        for (int s = 0; s < 4; ++s)
+          for (int k = 0; k < kShCoeffCount; ++k)
+            diag[size_t(r.probe[s]) * kShCoeffCount + size_t(k)] += r.weight[c] * r.a[s][k] * r.a[s][k];
+      }
+      for (size_t j = 0; j < np; ++j)
+        if (frozen[j])
+          for (int k = 0; k < kShCoeffCount; ++k) {
+            b[j * kShCoeffCount + size_t(k)] = 0.0;
+            diag[j * kShCoeffCount + size_t(k)] = 0.0;
+          }
+      auto apply = [&](const std::vector<double>& v, std::vector<double>& y) {
+        for (size_t i = 0; i < n; ++i) y[i] = prior[i] * v[i];
+        for (size_t i = 0; i < rows.size(); ++i)
+          if (use[i]) rowScatter(rows[i], rows[i].weight[c] * rowDot(rows[i], v), y);
+      };
+      std::vector<double> d(n, 0.0), res = b, z(n), p(n), q(n);
+      auto precondition = [&](const std::vector<double>& from, std::vector<double>& to) {
+        for (size_t i = 0; i < n; ++i) to[i] = diag[i] > 0.0 ? from[i] / diag[i] : 0.0;
+      };
+      precondition(res, z);
+      p = z;
+      double rz = 0.0;
+      for (size_t i = 0; i < n; ++i) rz += res[i] * z[i];
+      const double rz0 = rz;
+      int it = 0;
+      while (it < options.maxIterations && rz > 0.0 && rz > options.tolerance * options.tolerance * rz0) {
+        apply(p, q);
+        double pq = 0.0;
+        for (size_t i = 0; i < n; ++i) pq += p[i] * q[i];
+        if (!(pq > 0.0)) break;
+        const double alpha = rz / pq;
+        for (size_t i = 0; i < n; ++i) {
+          d[i] += alpha * p[i];
+          res[i] -= alpha * q[i];
+        }
+        precondition(res, z);
+        double rzNew = 0.0;
+        for (size_t i = 0; i < n; ++i) rzNew += res[i] * z[i];
+        const double beta = rzNew / rz;
+        rz = rzNew;
+        for (size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+        ++it;
+      }
+      if (iterations) iterations[c] = it;
+      std::copy(d.begin(), d.end(), delta.begin() + long(size_t(c) * n));
+    }
+    return delta;
+  };
 
   // How far a probe may move: per channel, its RMS irradiance change over normals at most maxMove x
   // max(its mean irradiance, f); the whole probe scaled by the smallest channel factor.
-  for (size_t j = 0; j < np; ++j) {
-    const glm::dvec3 e = meanIrradiance(level.sh[j]);
-    double scale = 1.0;
-    for (int c = 0; c < 3; ++c) {
-      double ms = 0.0;
-      for (int k = 0; k < kShCoeffCount; ++k) {
-        const double a = shCosineLobe(k) * delta[size_t(c) * n + j * kShCoeffCount + size_t(k)];
-        ms += a * a * kInv4Pi;
+  auto applyCapped = [&](const std::vector<double>& delta, size_t* capped) {
+    std::vector<ShRgb> result = level.sh;
+    for (size_t j = 0; j < np; ++j) {
+      const glm::dvec3 e = meanIrradiance(level.sh[j]);
+      double scale = 1.0;
+      for (int c = 0; c < 3; ++c) {
+        double ms = 0.0;
+        for (int k = 0; k < kShCoeffCount; ++k) {
+          const double a = shCosineLobe(k) * delta[size_t(c) * n + j * kShCoeffCount + size_t(k)];
+          ms += a * a * kInv4Pi;
+        }
+        const double limit = options.maxMove * std::max(e[c], f);
+        if (std::sqrt(ms) > limit) scale = std::min(scale, limit / std::sqrt(ms));
       }
-      const double limit = options.maxMove * std::max(e[c], f);
-      if (std::sqrt(ms) > limit) scale = std::min(scale, limit / std::sqrt(ms));
+      if (scale < 1.0 && capped) ++*capped;
+      ShRgb fitted = level.sh[j];
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < kShCoeffCount; ++k)
+          fitted.c[size_t(k)][c] = float(double(level.sh[j].c[size_t(k)][c]) +
+                                         scale * delta[size_t(c) * n + j * kShCoeffCount + size_t(k)]);
+      bool ok = true;
+      for (int c = 0; c < 3; ++c) {
+        fitted.c[0][c] = std::max(fitted.c[0][c], 0.0f);
+        for (int k = 0; k < kShCoeffCount; ++k) ok = ok && std::isfinite(fitted.c[size_t(k)][c]);
+      }
+      if (ok) result[j] = fitted;
     }
-    if (scale < 1.0) ++stats.cappedProbes;
-    ShRgb fitted = level.sh[j];
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < kShCoeffCount; ++k)
-        fitted.c[size_t(k)][c] = float(double(level.sh[j].c[size_t(k)][c]) +
-                                       scale * delta[size_t(c) * n + j * kShCoeffCount + size_t(k)]);
-    bool ok = true;
+    return result;
+  };
+
+  // A row's relative error (the hold-out's measure: mean over channels of |E - T| / max(T, f)) under `sh`.
+  auto rowRelError = [&](const Row& r, const std::vector<ShRgb>& sh) {
+    double e = 0.0;
     for (int c = 0; c < 3; ++c) {
-      fitted.c[0][c] = std::max(fitted.c[0][c], 0.0f);
-      for (int k = 0; k < kShCoeffCount; ++k) ok = ok && std::isfinite(fitted.c[size_t(k)][c]);
+      double v = 0.0;
+      for (int s = 0; s < 4; ++s)
+        for (int k = 0; k < kShCoeffCount; ++k)
+          v += r.a[s][k] * double(sh[size_t(r.probe[s])].c[size_t(k)][c]);
+      e += std::abs(v - r.target[c]) / std::max(r.target[c], f);
     }
-    if (ok) out[j] = fitted;
+    return e / 3.0;
+  };
+
+  std::vector<uint8_t> useAll(rows.size(), 0), frozen(np, 0);
+  for (size_t i = 0; i < rows.size(); ++i) useAll[i] = rows[i].kind == Row::kFitted ? 1 : 0;
+  if (options.crossValidate) {
+    // Two-fold cross-validation per probe: fit on every other point, measure the change of the relative error
+    // at the points left out, each point's change charged to its tet's probes by their weights. A probe whose
+    // fitted value made the points it did not see worse is held at its traced SH in the final fit.
+    std::vector<double> charge(np, 0.0);
+    for (size_t fold = 0; fold < 2; ++fold) {
+      std::vector<uint8_t> use(rows.size(), 0);
+      for (size_t i = 0; i < rows.size(); ++i) use[i] = useAll[i] && (i % 2 == fold) ? 1 : 0;
+      const std::vector<ShRgb> trial = applyCapped(solve(use, frozen, nullptr), nullptr);
+      for (size_t i = 0; i < rows.size(); ++i) {
+        if (!useAll[i] || use[i]) continue;
+        const double change = rowRelError(rows[i], trial) - rowRelError(rows[i], level.sh);
+        for (int s = 0; s < 4; ++s) charge[size_t(rows[i].probe[s])] += rows[i].w[s] * change;
+      }
+    }
+    for (size_t j = 0; j < np; ++j) {
+      frozen[j] = charge[j] > 0.0 ? 1 : 0;
+      stats.heldProbes += frozen[j];
+    }
   }
+  out = applyCapped(solve(useAll, frozen, stats.iterations), &stats.cappedProbes);
+  for (const Row& r : rows)
+    if (r.kind == Row::kFitted)
+      for (int c = 0; c < 3; ++c) {
+        const double res = r.target[c] - rowDot(r, x0[c]);
+        stats.objectiveBefore += r.weight[c] * res * res;
+      }
   // The data term at the result.
   for (int c = 0; c < 3; ++c) {
     std::vector<double> x(n);

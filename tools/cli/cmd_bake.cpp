@@ -256,10 +256,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   if (stats.fitRan)
     std::printf(
         "  fit     %s (--fit %s): %zu of %zu points fitted (%zu fall back, %zu skipped), %zu probes touched, "
-        "%zu capped; hold-out at %zu independent points: mean rel. error %.4f -> %.4f, gross %.4f -> %.4f\n",
+        "%zu capped, %zu held by cross-validation; hold-out at %zu independent points: mean rel. error %.4f "
+        "-> "
+        "%.4f, gross %.4f -> %.4f\n",
         stats.fitKept ? "kept" : "dropped", opt.fit.c_str(), stats.fit.fitted, stats.fit.points,
         stats.fit.fallbackPoints, stats.fit.otherSkipped, stats.fit.probesTouched, stats.fit.cappedProbes,
-        stats.fitHoldoutBefore.points, stats.fitHoldoutBefore.meanRelError,
+        stats.fit.heldProbes, stats.fitHoldoutBefore.points, stats.fitHoldoutBefore.meanRelError,
         stats.fitHoldoutAfter.meanRelError, stats.fitHoldoutBefore.gross, stats.fitHoldoutAfter.gross);
   if (!stats.holeRounds.empty()) {
     std::printf("  holes  ");
@@ -425,6 +427,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         {"skipped_points", stats.fit.otherSkipped},
         {"probes_touched", stats.fit.probesTouched},
         {"capped_probes", stats.fit.cappedProbes},
+        {"cross_validate", opt.fitValidate},
+        {"held_probes", stats.fit.heldProbes},
         {"cg_iterations", {stats.fit.iterations[0], stats.fit.iterations[1], stats.fit.iterations[2]}},
         {"objective_before", stats.fit.objectiveBefore},
         {"objective_after", stats.fit.objectiveAfter},

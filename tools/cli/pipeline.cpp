@@ -660,6 +660,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ShFitOptions fo;
     fo.lambda = options.fitLambda;
     fo.maxMove = options.fitMaxMove;
+    fo.crossValidate = options.fitValidate;
     std::vector<ShRgb> fitted =
         fitProbeSh(level, fitPoints, stats.bake.probeRelError, fo, &stats.fit, options.bake.threads);
     deringProbes(fitted, dering);

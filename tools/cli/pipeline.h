@@ -101,6 +101,7 @@ struct PipelineOptions {
   std::string fit = "auto";
   double fitLambda = 0.3;   // ShFitOptions::lambda
   double fitMaxMove = 0.3;  // ShFitOptions::maxMove
+  bool fitValidate = true;  // ShFitOptions::crossValidate
   int fitPoints = -1;
   int fitSamples = 256;
   int fitHoldout = 2048;

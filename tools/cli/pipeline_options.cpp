@@ -162,6 +162,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--fit-lambda")},
       {"--fit-max-move", "", "F", "fit: a probe's RMS irradiance change at most F x its mean irradiance",
        def("--fit-max-move")},
+      {"--fit-validate", "", "on|off",
+       "fit: hold at its traced SH each probe whose fit, cross-validated on two halves of the points, "
+       "worsens the points it was not fitted to",
+       def("--fit-validate")},
       {"--fit-points", "", "N|auto",
        "fit: area-uniform surface points (auto = 6 per probe that is not a shell probe, 2048 to 16384)",
        def("--fit-points")},
@@ -299,6 +303,9 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
   opt.fitMaxMove = args.number("--fit-max-move");
   if (!(opt.fitMaxMove >= 0.0) || !std::isfinite(opt.fitMaxMove))
     throw UsageError("--fit-max-move must be a finite number >= 0");
+  if (args.str("--fit-validate") != "on" && args.str("--fit-validate") != "off")
+    throw UsageError("--fit-validate must be on or off, not '" + args.str("--fit-validate") + "'");
+  opt.fitValidate = args.str("--fit-validate") == "on";
   opt.fitPoints = args.str("--fit-points") == "auto" ? -1 : args.integer("--fit-points");
   if (opt.fitPoints < -1) throw UsageError("--fit-points must be auto or >= 0");
   opt.fitSamples = args.integer("--fit-samples");
@@ -350,6 +357,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--fit", o.fit);
   add("--fit-lambda", exactNumber(o.fitLambda));
   add("--fit-max-move", exactNumber(o.fitMaxMove));
+  add("--fit-validate", o.fitValidate ? "on" : "off");
   add("--fit-points", o.fitPoints < 0 ? "auto" : std::to_string(o.fitPoints));
   add("--fit-samples", std::to_string(o.fitSamples));
   add("--fit-holdout", std::to_string(o.fitHoldout));

@@ -19,6 +19,14 @@
 // Then each probe's move is capped: per channel, the RMS change of its irradiance over normals at most
 // maxMove x max(its irradiance, f) (scaled down as a whole), and L00 kept >= 0. The caller derings afterwards
 // (bake.h, deringProbes), which keeps E(n) >= 0 for every normal.
+//
+// Cross-validation (ShFitOptions::crossValidate). A probe's fitted value can serve the points it was fitted to
+// and miss the ones between them (a probe lighting both sides of a door gap, a probe whose few points happen to
+// be noisy). Before the final fit, the points are split in two folds (even and odd index); each fold is fitted
+// alone (capped as below), and at every point of the other fold the change of its relative error
+// (|E - T| / max(T, f), mean over channels, as the hold-out scores) is charged to its tet's probes by their
+// lookup weights. A probe whose charge is positive (its fitted values made unseen points worse on balance) is
+// held at its traced SH in the final fit over all points, which moves only the others.
 #pragma once
 
 #include <cstddef>
@@ -52,6 +60,7 @@ struct ShFitOptions {
   double maxMove = 0.3;           // cap on a probe's RMS irradiance change, x max(its irradiance, f)
   int maxIterations = 400;        // conjugate-gradient iterations per channel
   double tolerance = 1e-6;        // stop when the preconditioned residual falls below this x its start
+  bool crossValidate = true;      // hold probes whose fit worsens the points left out (see below)
 };
 
 struct ShFitStats {
@@ -61,6 +70,7 @@ struct ShFitStats {
   size_t otherSkipped = 0;    // left out: no tet, or a non-finite target
   size_t probesTouched = 0;   // probes some fitted point weights
   size_t cappedProbes = 0;    // probes whose move the maxMove cap shortened (any channel)
+  size_t heldProbes = 0;      // probes the cross-validation held at their traced SH
   int iterations[3] = {0, 0, 0};
   double objectiveBefore = 0.0, objectiveAfter = 0.0;  // data term (all channels) at x0 and at the result
 };
