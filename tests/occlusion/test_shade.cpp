@@ -238,8 +238,8 @@ TEST(Shade, RecordIsTheOcclusionRuleTakenStepByStep) {
 }
 
 // The hole finder counts with the lookup's shading: its hole points are the surface points whose record has
-// an own-data fallback, its lookup-fallback points those whose answer falls back (after the face blend), and
-// occlusionFallbackShare is the record's own-data share.
+// an own-data fallback (with lookupOnly, an answer that falls back), its lookup-fallback points those whose
+// answer falls back (after the blend over the stars), and occlusionFallbackShare is the record's own-data share.
 TEST(OcclusionHoles, CountsAreTheShadeRecordsFallbacks) {
   const ClosetRoom room;
   const SceneTracer tracer(room.scene);
@@ -263,6 +263,12 @@ TEST(OcclusionHoles, CountsAreTheShadeRecordsFallbacks) {
   EXPECT_GT(own, 0u);
   EXPECT_EQ(holes.holePoints, own);
   EXPECT_EQ(holes.lookupFallbackPoints, lookup);
+  // The round aimed at the lookup (the bake's --lookup-holes) judges a hole by the answer, not the data.
+  options.lookupOnly = true;
+  const OcclusionHoles byLookup = findOcclusionHoles(tracer, room.level, options);
+  EXPECT_EQ(byLookup.holePoints, lookup);
+  EXPECT_EQ(byLookup.lookupFallbackPoints, lookup);
+  EXPECT_LT(lookup, own);
 }
 
 // The hole finder checks a number of points proportional to the level's surface, with no upper bound by

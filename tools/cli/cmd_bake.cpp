@@ -272,6 +272,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
             r.holes, r.checked, r.seen, r.added);
       else
         std::printf(" [%zu of %zu points see no probe: +%zu probes]", r.holes, r.checked, r.added);
+    for (const auto& r : stats.lookupHoleRounds)
+      std::printf(" [after refinement, %zu of %zu points fall back in the lookup: +%zu probes]", r.holes,
+                  r.checked, r.added);
     std::printf("\n");
   }
   if (stats.finalChecked > 0)
@@ -331,6 +334,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                     {"occlusion", occlusionModeName(opt.occlusion.mode)},
                     {"min_agreement", opt.occlusion.minAgreement},
                     {"fill_holes", opt.holeRounds},
+                    {"lookup_holes", opt.lookupHoleRounds},
                     {"hole_rule", opt.holesOnlyUnseen ? "unseen" : "all"},
                     {"probe_budget", opt.probeBudget},
                     {"refine_points", refinePoints}};
@@ -404,7 +408,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                         {"hole_points", r.holes},
                         {"fallback_probe_seen", r.seen},
                         {"probes_added", r.added}});
+    nlohmann::json lookupRounds = nlohmann::json::array();
+    for (const auto& r : stats.lookupHoleRounds)
+      lookupRounds.push_back(
+          {{"points_checked", r.checked}, {"lookup_fallback_points", r.holes}, {"probes_added", r.added}});
     j["holes"] = {{"rounds", rounds},
+                  {"lookup_rounds", lookupRounds},
                   {"probes_added", stats.holeProbes},
                   {"final_points_checked", stats.finalChecked},
                   {"final_hole_points", stats.finalHoles},

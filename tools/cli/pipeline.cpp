@@ -563,6 +563,34 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   };
   const bool baked = options.importShCsv.empty();
 
+  // The rounds aimed at the lookup's fallback, once the hole and refinement probes are in (before the late
+  // sliver pass, which bounds the tets of every probe added after the fillers).
+  auto lookupHoles = [&] {
+    if (options.lookupHoleRounds <= 0 || options.holeRounds <= 0 ||
+        options.occlusion.mode == OcclusionMode::kNone || !baked)
+      return;
+    if (occlusionStale) {
+      occlude();
+      occlusionStale = false;
+    }
+    for (int round = 0; round < options.lookupHoleRounds; ++round) {
+      OcclusionHoleOptions ho;
+      ho.spacing = options.spacing;
+      ho.seed = options.bake.seed ^ (0x100c5ull + uint64_t(round));
+      ho.lookupOnly = true;
+      stage.emplace("holes (lookup, round " + std::to_string(round + 1) + " of " +
+                        std::to_string(options.lookupHoleRounds) + ")",
+                    0, "", show);
+      const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
+      stats.lookupHoleRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size(), 0});
+      stage.reset();
+      if (holes.probes.empty()) break;
+      stats.holeProbes += holes.probes.size();
+      addProbes(holes.probes, 0x100c5ull + uint64_t(round), LevelProbeKind::kHole);
+    }
+    timer.mark("holes (lookup)");
+  };
+
   // Occlusion holes: probes where a surface point sees none of its tet's probes (occlusion_holes.h).
   if (options.holeRounds > 0 && options.occlusion.mode != OcclusionMode::kNone && baked) {
     for (int round = 0; round < options.holeRounds; ++round) {
@@ -617,13 +645,17 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     // Occluded once, after the late sliver pass (which may remove some of these probes).
     if (!added.empty()) addProbes(added, 0x2ef1eull, LevelProbeKind::kRefinement, !options.lateSlivers);
     timer.mark("refine");
+    lookupHoles();
     latePass();
     stage.emplace("refine (check)", 0, "", show);
     stats.refineAfter = scoreRefinePoints(level, check);
     timer.mark("refine (check)");
     stage.reset();
   }
-  if (!lateDone) latePass();
+  if (!lateDone) {
+    lookupHoles();
+    latePass();
+  }
 
   // The SH fit (eval/sh_fit.h): the probe SH that make the lookup's answer match the traced irradiance at
   // area-uniform surface points, pulled toward the traced values by their noise; deringed, then kept (auto)

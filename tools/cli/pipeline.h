@@ -71,6 +71,10 @@ struct PipelineOptions {
   // (pipeline_options.h).
   int holeRounds = 3;
   bool holesOnlyUnseen = false;  // OcclusionHoleOptions::onlyUnseen (--hole-rule unseen)
+  // Rounds after the hole rounds and refinement (whose probes re-tetrahedralize the level and open holes of
+  // their own) that add probes where the lookup's answer, after the blend over the probes' stars, still falls
+  // back (OcclusionHoleOptions::lookupOnly). 0 = none; needs occlusion and hole filling (holeRounds > 0).
+  int lookupHoleRounds = 1;
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
   // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 =
   // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone
@@ -158,6 +162,7 @@ struct PipelineStats {
     size_t seen = 0;  // --hole-rule unseen: hole points left alone (their fallback probe seen by rays)
   };
   std::vector<HoleRound> holeRounds;
+  std::vector<HoleRound> lookupHoleRounds;  // the rounds aimed at the lookup's fallback, after refinement
   size_t holeProbes = 0;
   size_t finalChecked = 0, finalHoles = 0;  // the finished level's (0, 0: no occlusion data)
   size_t finalLookupFallbacks = 0;          // of finalChecked, those whose run-time answer falls back

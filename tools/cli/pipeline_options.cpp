@@ -123,6 +123,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "with a probe they see (reached by a ray, not darker than the blend capping the fallback): fewer "
        "probes, smaller levels and shorter bakes, accuracy mixed (docs/accuracy.md)",
        def("--hole-rule")},
+      {"--lookup-holes", "", "ROUNDS",
+       "rounds after refinement that add a probe in front of surface points where the lookup's answer (after "
+       "the blend over the probes' stars) still falls back; needs --fill-holes > 0 (0 = none)",
+       def("--lookup-holes")},
       {"--probe-budget", "", "N|auto",
        "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
        "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
@@ -268,6 +272,9 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
   if (args.str("--hole-rule") != "all" && args.str("--hole-rule") != "unseen")
     throw UsageError("--hole-rule must be all or unseen, not '" + args.str("--hole-rule") + "'");
   opt.holesOnlyUnseen = args.str("--hole-rule") == "unseen";
+  opt.lookupHoleRounds = args.integer("--lookup-holes");
+  if (opt.lookupHoleRounds < 0 || opt.lookupHoleRounds > 16)
+    throw UsageError("--lookup-holes must be in [0, 16]");
   opt.probeBudget = args.str("--probe-budget") == "auto" ? -1 : args.integer("--probe-budget");
   // User probes alone are the level's probes: hole filling and refinement add probes only when asked.
   if (opt.placement == "none") {
@@ -348,6 +355,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--min-agreement", exactNumber(o.occlusion.minAgreement));
   add("--fill-holes", std::to_string(o.holeRounds));
   add("--hole-rule", o.holesOnlyUnseen ? "unseen" : "all");
+  add("--lookup-holes", std::to_string(o.lookupHoleRounds));
   add("--probe-budget", o.probeBudget < 0 ? "auto" : std::to_string(o.probeBudget));
   add("--refine-points", o.refinePoints < 0 ? "auto" : std::to_string(o.refinePoints));
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");

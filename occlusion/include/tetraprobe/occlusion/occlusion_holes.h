@@ -32,13 +32,18 @@ struct OcclusionHoleOptions {
   // unoccluded blend that caps the fallback (the bake's --hole-rule unseen; docs/accuracy.md has the trade).
   bool onlyUnseen = false;
   bool propose = true;  // false: count the hole points only (the bake's check of the finished level)
+  // Judge a hole by the lookup's answer (ShadeRecord::fallback: the visibility after the blend over the
+  // probes' stars hides every probe) instead of the tet's own data (ownFallback): the bake's last round,
+  // after refinement, aimed at what a viewer would see fall back.
+  bool lookupOnly = false;
 };
 
 inline constexpr int kMaxHolePoints = 1 << 25;  // 33.5 M points, about 1.3 GB of SurfacePoint
 
 struct OcclusionHoles {
   size_t pointsChecked = 0;  // surface points drawn (on their open side)
-  size_t holePoints = 0;     // of those, points that see none of their tet's probes (fallback share > 0)
+  size_t holePoints = 0;     // of those, points that see none of their tet's probes (fallback share > 0;
+                             // with lookupOnly, by the lookup's answer)
   size_t seenPoints = 0;     // of those, with onlyUnseen: points left alone, their fallback probe seen
   size_t lookupFallbackPoints = 0;  // of pointsChecked, points whose run-time answer falls back: the
                                     // visibility after the face blend (lookupVisibility, face_blend.h) hides
