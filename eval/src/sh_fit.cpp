@@ -272,7 +272,9 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
     return result;
   };
 
-  // A row's relative error (the hold-out's measure: mean over channels of |E - T| / max(T, f)) under `sh`.
+  // A row's error under `sh`: the mean over channels of |ln((max(E, 0) + f) / (T + f))|, symmetric in the ratio,
+  // so that a point pushed to half its light counts as one pushed to twice it (the gate's gross share counts
+  // both).
   auto rowRelError = [&](const Row& r, const std::vector<ShRgb>& sh) {
     double e = 0.0;
     for (int c = 0; c < 3; ++c) {
@@ -280,7 +282,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
       for (int s = 0; s < 4; ++s)
         for (int k = 0; k < kShCoeffCount; ++k)
           v += r.a[s][k] * double(sh[size_t(r.probe[s])].c[size_t(k)][c]);
-      e += std::abs(v - r.target[c]) / std::max(r.target[c], f);
+      e += std::abs(std::log((std::max(v, 0.0) + f) / (std::max(r.target[c], 0.0) + f)));
     }
     return e / 3.0;
   };

@@ -273,8 +273,7 @@ TEST(ShFit, LowersTheErrorAtIndependentPointsOnAClosedFormScene) {
   level.sh = fitted;
   const double after = shFitScore(level, holdout).meanRelError;
   EXPECT_GT(before, 0.1) << "the traced probes must leave an error for the fit to lower";
-  // 0.651 -> 0.456 (0.450 without the cross-validation, which holds a few probes far from the peak).
-  EXPECT_LT(after, 0.75 * before) << "before " << before << " after " << after;
+  EXPECT_LT(after, 0.7 * before) << "before " << before << " after " << after;
   const ProbeQuery query(level);
   for (size_t i = 0; i < holdout.size(); ++i) {
     const glm::vec3 e = query.irradiance(holdout[i].position, unitNormal(i));

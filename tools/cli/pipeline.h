@@ -74,7 +74,7 @@ struct PipelineOptions {
   // Rounds after the hole rounds and refinement (whose probes re-tetrahedralize the level and open holes of
   // their own) that add probes where the lookup's answer, after the blend over the probes' stars, still falls
   // back (OcclusionHoleOptions::lookupOnly). 0 = none; needs occlusion and hole filling (holeRounds > 0).
-  int lookupHoleRounds = 1;
+  int lookupHoleRounds = 2;
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
   // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 =
   // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone

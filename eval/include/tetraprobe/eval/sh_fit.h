@@ -23,9 +23,9 @@
 // Cross-validation (ShFitOptions::crossValidate). A probe's fitted value can serve the points it was fitted to
 // and miss the ones between them (a probe lighting both sides of a door gap, a probe whose few points happen to
 // be noisy). Before the final fit, the points are split in two folds (even and odd index); each fold is fitted
-// alone (capped as below), and at every point of the other fold the change of its relative error
-// (|E - T| / max(T, f), mean over channels, as the hold-out scores) is charged to its tet's probes by their
-// lookup weights. A probe whose charge is positive (its fitted values made unseen points worse on balance) is
+// alone (capped as below), and at every point of the other fold the change of its error, the mean over channels
+// of |ln((max(E, 0) + f) / (T + f))| (symmetric in the ratio, as the gate's gross share is), is charged to its
+// tet's probes by their lookup weights. A probe whose charge is positive (its fitted values made unseen points worse on balance) is
 // held at its traced SH in the final fit over all points, which moves only the others.
 #pragma once
 
