@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
+
+#include <glm/geometric.hpp>
 
 #include "tetraprobe/tetra/final_slivers.h"
 #include "tetraprobe/tetra/quality.h"
@@ -101,6 +104,42 @@ TEST(LateSlivers, FillersSpareLateProbesAndObeyTheInsideTest) {
       fixFinalSlivers(l.points, l.spacing, o,
                       [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
   EXPECT_TRUE(vetoed.added.empty());
+  EXPECT_EQ(vetoed.removed, none.removed);
+}
+
+// Moving a late probe off its slivers (step 1b) spares it: with move rounds the pass still reaches the bound,
+// drops fewer late probes than without, moves only late probes (by at most maxNudge x spacing), and its mesh is
+// the Delaunay mesh of the kept points where they now stand; where the inside test vetoes every move, it drops
+// exactly what the removal alone drops.
+TEST(LateSlivers, MovesSpareLateProbesAndStillReachTheBound) {
+  const LateCase l = latticeWithLateProbes(0.2);
+  FinalSliverOptions o;
+  o.targetDeg =
+      worstOf(std::vector<glm::dvec3>(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate)));
+  o.firstLate = l.firstLate;
+  const FinalSliverResult none = fixFinalSlivers(l.points, l.spacing, o, nullptr);
+  o.nudgeRounds = 4;
+  const FinalSliverResult moved = fixFinalSlivers(l.points, l.spacing, o, nullptr);
+  std::printf("[lattice] dropped %zu without moves; with them %zu moved, %zu dropped (%d rounds)\n",
+              none.removed.size(), moved.moved.size(), moved.removed.size(), moved.nudgeRounds);
+  EXPECT_GE(moved.after.worstMinDihedralDeg, o.targetDeg);
+  EXPECT_GT(moved.nudgeRounds, 0);
+  EXPECT_LT(moved.removed.size(), none.removed.size());
+  std::vector<glm::dvec3> at = l.points;
+  for (const auto& [i, p] : moved.moved) {
+    EXPECT_GE(i, l.firstLate) << "an earlier probe was moved";
+    EXPECT_LE(glm::distance(p, l.points[i]), 4.0 * o.maxNudge * l.spacing[i] * (1.0 + 1e-9));
+    EXPECT_FALSE(std::binary_search(moved.removed.begin(), moved.removed.end(), i));
+    at[i] = p;
+  }
+  std::vector<glm::dvec3> kept;
+  for (size_t i = 0; i < at.size(); ++i)
+    if (!std::binary_search(moved.removed.begin(), moved.removed.end(), i)) kept.push_back(at[i]);
+  EXPECT_EQ(tetrahedralizeDelaunay(kept).tets, moved.mesh.tets);
+  const FinalSliverResult vetoed =
+      fixFinalSlivers(l.points, l.spacing, o,
+                      [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
+  EXPECT_TRUE(vetoed.moved.empty());
   EXPECT_EQ(vetoed.removed, none.removed);
 }
 

@@ -124,16 +124,10 @@ FinalSliverResult fixFinalSlivers(
     r.fillerRounds = round + 1;
   }
 
-  // (2) Remove late corners of the slivers left, until none is left or none has a late corner. Per round a
-  // greedy cover: the removable corner of the most slivers goes first (ties: the one added last), and a
-  // sliver one of whose corners goes is covered.
-  for (;;) {
-    std::vector<uint8_t> drop(pos.size(), 0);
-    size_t dropped = 0;
-    std::vector<std::array<int32_t, 4>> slivers;
-    for (const auto& t : r.mesh.tets)
-      if (tetMinDihedral(pos, t) < target) slivers.push_back(t);
-    auto removable = [&](size_t v) { return from[v] < 0 || size_t(from[v]) >= options.firstLate; };
+  // (1b) Move late corners off their slivers. The corners are chosen as step 2's cover chooses them.
+  auto removable = [&](size_t v) { return from[v] < 0 || size_t(from[v]) >= options.firstLate; };
+  auto cover = [&](const std::vector<std::array<int32_t, 4>>& slivers) {
+    std::vector<uint8_t> chosen(pos.size(), 0);
     std::vector<uint32_t> count(pos.size(), 0);
     for (const auto& t : slivers)
       for (int k = 0; k < 4; ++k)
@@ -144,8 +138,7 @@ FinalSliverResult fixFinalSlivers(
       for (size_t v = 0; v < pos.size(); ++v)
         if (count[v] > 0 && (best == pos.size() || count[v] >= count[best])) best = v;
       if (best == pos.size()) break;
-      drop[best] = 1;
-      ++dropped;
+      chosen[best] = 1;
       for (size_t s = 0; s < slivers.size(); ++s) {
         const auto& t = slivers[s];
         if (covered[s] || std::find(t.begin(), t.end(), int32_t(best)) == t.end()) continue;
@@ -154,6 +147,74 @@ FinalSliverResult fixFinalSlivers(
           if (removable(size_t(t[size_t(k)]))) --count[size_t(t[size_t(k)])];
       }
     }
+    return chosen;
+  };
+  auto sliversOf = [&](const TetMesh& mesh) {
+    std::vector<std::array<int32_t, 4>> slivers;
+    for (const auto& t : mesh.tets)
+      if (tetMinDihedral(pos, t) < target) slivers.push_back(t);
+    return slivers;
+  };
+  bad = countBelow(pos, r.mesh, target);
+  for (int round = 0; round < options.nudgeRounds && bad > 0; ++round) {
+    const std::vector<std::array<int32_t, 4>> slivers = sliversOf(r.mesh);
+    const std::vector<uint8_t> chosen = cover(slivers);
+    std::vector<glm::dvec3> dir(pos.size(), glm::dvec3(0.0));
+    std::vector<double> edge(pos.size(), 0.0), n(pos.size(), 0.0);
+    for (const auto& t : slivers)
+      for (int k = 0; k < 4; ++k) {
+        const size_t v = size_t(t[size_t(k)]);
+        if (!chosen[v]) continue;
+        const glm::dvec3 a = pos[size_t(t[size_t((k + 1) % 4)])], b = pos[size_t(t[size_t((k + 2) % 4)])],
+                         c = pos[size_t(t[size_t((k + 3) % 4)])];
+        glm::dvec3 normal = glm::cross(b - a, c - a);
+        const double len = glm::length(normal);
+        if (!(len > 0.0)) continue;
+        normal /= len;
+        if (glm::dot(normal, pos[v] - a) < 0.0) normal = -normal;
+        dir[v] += normal;
+        double sum = 0.0;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j)
+            sum += glm::distance(pos[size_t(t[size_t(i)])], pos[size_t(t[size_t(j)])]);
+        edge[v] += sum / 6.0;
+        n[v] += 1.0;
+      }
+    std::vector<size_t> which;
+    std::vector<glm::dvec3> cand;
+    for (size_t v = 0; v < pos.size(); ++v) {
+      const double len = glm::length(dir[v]);
+      if (!chosen[v] || !(len > 0.0) || !(n[v] > 0.0)) continue;
+      const double step = std::min(options.nudgeFraction * edge[v] / n[v], options.maxNudge * spc[v]);
+      which.push_back(v);
+      cand.push_back(pos[v] + dir[v] / len * step);
+    }
+    if (cand.empty()) break;
+    std::vector<uint8_t> in(cand.size(), 0);
+    if (inside) in = inside(cand);
+    std::vector<glm::dvec3> trial = pos;
+    size_t movedCount = 0;
+    for (size_t i = 0; i < cand.size(); ++i)
+      if (!in[i]) {
+        trial[which[i]] = cand[i];
+        ++movedCount;
+      }
+    if (movedCount == 0) break;
+    TetMesh mesh = delaunay(trial, options.backend);
+    const size_t nowBad = countBelow(trial, mesh, target);
+    if (nowBad >= bad) break;  // the moves made as many slivers as they fixed: undo and stop
+    pos = std::move(trial);
+    r.mesh = std::move(mesh);
+    bad = nowBad;
+    r.nudgeRounds = round + 1;
+  }
+
+  // (2) Remove late corners of the slivers left, until none is left or none has a late corner. Per round a
+  // greedy cover: the removable corner of the most slivers goes first (ties: the one added last), and a
+  // sliver one of whose corners goes is covered.
+  for (;;) {
+    const std::vector<uint8_t> drop = cover(sliversOf(r.mesh));
+    const size_t dropped = size_t(std::count(drop.begin(), drop.end(), uint8_t(1)));
     if (dropped == 0) break;
     size_t w = 0;
     for (size_t i = 0; i < pos.size(); ++i) {
@@ -172,10 +233,12 @@ FinalSliverResult fixFinalSlivers(
 
   std::vector<uint8_t> kept(points.size(), 0);
   for (size_t i = 0; i < pos.size(); ++i) {
-    if (from[i] >= 0)
+    if (from[i] >= 0) {
       kept[size_t(from[i])] = 1;
-    else
+      if (pos[i] != points[size_t(from[i])]) r.moved.emplace_back(size_t(from[i]), pos[i]);
+    } else {
       r.added.push_back(pos[i]);
+    }
   }
   for (size_t i = 0; i < points.size(); ++i)
     if (!kept[i]) r.removed.push_back(i);

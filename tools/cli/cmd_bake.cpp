@@ -215,11 +215,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     std::printf(
         "  late    slivers after hole and refinement probes (bound %.3g deg): worst %.3g -> %.3g deg, under "
         "1 / 5 / 10 deg "
-        "%zu / %zu / %zu -> %zu / %zu / %zu; %zu fillers added, %zu late probes dropped (%zu hole, %zu "
-        "refinement)\n",
+        "%zu / %zu / %zu -> %zu / %zu / %zu; %zu fillers added, %zu late probes moved, %zu dropped (%zu "
+        "hole, "
+        "%zu refinement)\n",
         stats.lateTargetDeg, stats.minDihedralBeforeLate, stats.minDihedral, stats.tetsBelowBeforeLate[0],
         stats.tetsBelowBeforeLate[1], stats.tetsBelowBeforeLate[2], stats.tetsBelow[0], stats.tetsBelow[1],
-        stats.tetsBelow[2], stats.lateFillers, stats.lateRemoved, stats.lateRemovedHole,
+        stats.tetsBelow[2], stats.lateFillers, stats.lateMoved, stats.lateRemoved, stats.lateRemovedHole,
         stats.lateRemovedRefinement);
   if (!stats.importedProbes) {
     std::printf("  rays    %llu (%.3g Mrays/s), %llu paths (%.0f per probe, at most %d)\n",
@@ -368,6 +369,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
           {"below_1_5_10_deg_before", stats.tetsBelowBeforeLate},
           {"worst_tet_before", stats.worstTetBeforeLate},
           {"fillers_added", stats.lateFillers},
+          {"probes_moved", stats.lateMoved},
           {"probes_removed", stats.lateRemoved},
           {"hole_probes_removed", stats.lateRemovedHole},
           {"refinement_probes_removed", stats.lateRemovedRefinement}}},

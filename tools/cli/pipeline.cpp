@@ -499,6 +499,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       stats.lateTargetDeg = fo.targetDeg;
       fo.firstLate = firstLate;
       fo.maxFillers = size_t(std::max(0, options.lateFillers));
+      fo.nudgeRounds = options.lateNudgeRounds;
       const ClearanceQuery clearance = tracerClearance(tracer, options.bake.threads);
       const FinalSliverResult r =
           fixFinalSlivers(probes, spacing, fo, [&](const std::vector<glm::dvec3>& pts) {
@@ -515,6 +516,34 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       stats.worstTetBeforeLate = stats.worstTet;
       stats.lateRemoved = r.removed.size();
       stats.lateFillers = r.added.size();
+      stats.lateMoved = r.moved.size();
+      if (!r.moved.empty()) {
+        // Moved late probes are traced again where they now stand (their own seeds, as the rounds' probes).
+        std::vector<glm::dvec3> at;
+        for (const auto& [i, p] : r.moved) {
+          probes[i] = p;
+          level.probes[i] = glm::vec3(p - level.origin);
+          at.push_back(p);
+        }
+        BakeOptions bake = options.bake;
+        bake.seed = options.bake.seed ^ (0x3017eull * 0x9e3779b97f4a7c15ull);
+        bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
+        stage.reset();
+        BakeStats more;
+        std::vector<ShRgb> sh = bakeProbes(tracer, at, bake, &more);
+        stats.bake.intersectRays += more.intersectRays;
+        stats.bake.occludedRays += more.occludedRays;
+        stats.bake.paths += more.paths;
+        stats.bake.seconds += more.seconds;
+        deringProbes(sh, dering);
+        std::vector<float>& noise = stats.bake.probeRelError;
+        for (size_t k = 0; k < r.moved.size(); ++k) {
+          level.sh[r.moved[k].first] = sh[k];
+          if (noise.size() == probes.size() && k < more.probeRelError.size())
+            noise[r.moved[k].first] = more.probeRelError[k];
+        }
+        occlusionStale = options.occlusion.mode != OcclusionMode::kNone;
+      }
       if (!r.removed.empty()) {
         std::vector<uint8_t> drop(probes.size(), 0);
         for (size_t i : r.removed) {
@@ -545,7 +574,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       }
       if (!r.added.empty())
         addProbes(r.added, 0x51173ull, LevelProbeKind::kFiller, false, &r.mesh);
-      else if (!r.removed.empty())
+      else if (!r.removed.empty() || !r.moved.empty())
         remesh(&r.mesh);
       occlusionStale = occlusionStale || !r.removed.empty();
       timer.mark("late slivers");

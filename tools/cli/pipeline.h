@@ -89,6 +89,7 @@ struct PipelineOptions {
   // 0.039 at the 2 deg bound; docs/occlusion.md).
   bool lateSlivers = false;
   int lateFillers = 0;
+  int lateNudgeRounds = 4;  // FinalSliverOptions::nudgeRounds: move late probes off slivers before dropping
   // The pass's bound, degrees: the smaller of this and the worst tet's before those probes; < 0 = auto (the
   // worst before those probes, whatever it is). 2 by default: on Veach Ajar (14.6 deg before) and the Cornell
   // box (7.2) the auto bound drops most hole and refinement probes and their accuracy with them.
@@ -154,6 +155,7 @@ struct PipelineStats {
   double lateTargetDeg =
       0.0;  // the bound it worked to  // the late pass ran (probes were added after the fillers)
   size_t lateFillers = 0, lateRemoved = 0, lateRemovedHole = 0, lateRemovedRefinement = 0;
+  size_t lateMoved = 0;  // late probes moved off their slivers and traced again
 
   // Occlusion-hole filling, per round: surface points checked, points seeing none of their probes, probes
   // added; and after the last round, the points still falling back (measured on a fresh draw).

@@ -147,6 +147,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "them (late fillers, then the late probe of each sliver left is dropped; docs/occlusion.md); keep = "
        "leave their slivers (the default: dropping refinement probes cost the Cornell box accuracy)",
        def("--late-slivers")},
+      {"--late-nudge", "", "ROUNDS",
+       "late sliver pass: rounds that move the late probes at slivers (a short step away from the sliver's "
+       "opposite faces, then traced again) before any is dropped; 0 = drop only",
+       def("--late-nudge")},
       {"--late-fillers", "", "N",
        "late sliver pass: filler probes it may add (each baked like a refinement probe) before it drops "
        "late probes",
@@ -294,6 +298,9 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     throw UsageError("--late-slivers must be fix or keep, not '" + args.str("--late-slivers") + "'");
   opt.lateSlivers = args.str("--late-slivers") == "fix";
   opt.lateFillers = args.integer("--late-fillers");
+  opt.lateNudgeRounds = args.integer("--late-nudge");
+  if (opt.lateNudgeRounds < 0 || opt.lateNudgeRounds > 16)
+    throw UsageError("--late-nudge must be in [0, 16]");
   opt.lateMinDihedral = -1.0;
   if (args.str("--late-min-dihedral") != "auto") {
     opt.lateMinDihedral = args.number("--late-min-dihedral");
@@ -361,6 +368,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--refine-offset", o.refineOffset > 0.0 ? exactNumber(o.refineOffset) : "auto");
   add("--late-slivers", o.lateSlivers ? "fix" : "keep");
   add("--late-fillers", std::to_string(o.lateFillers));
+  add("--late-nudge", std::to_string(o.lateNudgeRounds));
   add("--late-min-dihedral", o.lateMinDihedral < 0.0 ? "auto" : exactNumber(o.lateMinDihedral));
   add("--fit", o.fit);
   add("--fit-lambda", exactNumber(o.fitLambda));

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -24,16 +25,22 @@ struct FinalSliverOptions {
   size_t maxFillers = 0;     // filler probes the pass may add in all (each one costs a probe bake)
   int fillerRounds = 2;      // re-tetrahedralizations spent on fillers at most
   double minDistance = 0.5;  // a filler closer than this x its spacing to a probe is skipped (mergeProbes)
+  int nudgeRounds = 0;       // re-tetrahedralizations spent moving late corners off their slivers (step 1b)
+  double nudgeFraction = 0.15;  // a move's length: this x the mean edge of the corner's slivers ...
+  double maxNudge = 0.125;      // ... at most this x the corner's spacing
 };
 
 struct FinalSliverResult {
   MeshQuality before, after;      // before: Delaunay of the points as given; after: of the result
   std::vector<size_t> removed;    // indices into the given points, ascending (all >= firstLate)
   std::vector<glm::dvec3> added;  // fillers, appended after the kept points in this order
-  TetMesh mesh;                   // Delaunay of kept points (given order) then `added`
-  size_t rejected = 0;            // filler candidates dropped (inside geometry, near a probe, budget)
-  int fillerRounds = 0;           // filler rounds kept
-  int removalRounds = 0;          // re-tetrahedralizations spent on removals
+  std::vector<std::pair<size_t, glm::dvec3>> moved;  // kept late points that step 1b moved: (index into the
+                                                     // given points, new position), ascending by index
+  TetMesh mesh;                                      // Delaunay of kept points (given order) then `added`
+  size_t rejected = 0;    // filler candidates dropped (inside geometry, near a probe, budget)
+  int fillerRounds = 0;   // filler rounds kept
+  int removalRounds = 0;  // re-tetrahedralizations spent on removals
+  int nudgeRounds = 0;    // move rounds kept (step 1b)
 };
 
 // Tetrahedralizes `points` (Delaunay, options.backend). When its worst min dihedral is below targetDeg:
@@ -41,7 +48,12 @@ struct FinalSliverResult {
 // the longest edge from the centroid) of each interior tet (no hull face) below targetDeg, with the tet's
 // mean corner spacing (`spacing`, one per point, metres), filtered as addSliverFillers does (merge tolerance
 // minDistance x spacing, then `inside`, which may be empty), at most maxFillers in all, in tet order; a round
-// is kept only when it lowers the number of tets below targetDeg, else undone and the loop ends. (2) While a
+// is kept only when it lowers the number of tets below targetDeg, else undone and the loop ends. (1b) Up to
+// nudgeRounds rounds of moves: the removable corners step 2 would pick (its greedy cover) are moved instead,
+// each away from the faces opposite it in its slivers (the sum of those faces' unit normals towards it, so the
+// slivers gain height) by nudgeFraction x the slivers' mean edge, at most maxNudge x its spacing; moves that
+// `inside` vetoes are skipped; a round is kept only when it lowers the number of tets below targetDeg, else
+// undone and the loop ends. A moved probe must be traced again at its new position (the caller's). (2) While a
 // tet is below targetDeg: removable corners (late probes and fillers of step 1) of those tets are removed, a
 // greedy cover (the corner of the most such tets first, ties to the highest index, until each such tet with
 // a removable corner lost one), and the points tetrahedralized again; ends when no tet is below targetDeg
