@@ -275,7 +275,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
   // A row's error under `sh`: the mean over channels of |ln((max(E, 0) + f) / (T + f))|, symmetric in the ratio,
   // so that a point pushed to half its light counts as one pushed to twice it (the gate's gross share counts
   // both).
-  auto rowRelError = [&](const Row& r, const std::vector<ShRgb>& sh) {
+  auto rowError = [&](const Row& r, const std::vector<ShRgb>& sh) {
     double e = 0.0;
     for (int c = 0; c < 3; ++c) {
       double v = 0.0;
@@ -290,7 +290,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
   std::vector<uint8_t> useAll(rows.size(), 0), frozen(np, 0);
   for (size_t i = 0; i < rows.size(); ++i) useAll[i] = rows[i].kind == Row::kFitted ? 1 : 0;
   if (options.crossValidate) {
-    // Two-fold cross-validation per probe: fit on every other point, measure the change of the relative error
+    // Two-fold cross-validation per probe: fit on every other point, measure the change of the error (rowError)
     // at the points left out, each point's change charged to its tet's probes by their weights. A probe whose
     // fitted value made the points it did not see worse is held at its traced SH in the final fit.
     std::vector<double> charge(np, 0.0);
@@ -300,7 +300,7 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
       const std::vector<ShRgb> trial = applyCapped(solve(use, frozen, nullptr), nullptr);
       for (size_t i = 0; i < rows.size(); ++i) {
         if (!useAll[i] || use[i]) continue;
-        const double change = rowRelError(rows[i], trial) - rowRelError(rows[i], level.sh);
+        const double change = rowError(rows[i], trial) - rowError(rows[i], level.sh);
         for (int s = 0; s < 4; ++s) charge[size_t(rows[i].probe[s])] += rows[i].w[s] * change;
       }
     }

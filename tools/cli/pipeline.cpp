@@ -446,6 +446,24 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
 
   // Appends probes (earlier probes keep their index, so their SH and seeds), bakes them with a seed of their
   // own, and tetrahedralizes the whole level again; occludes it again unless `reocclude` is false.
+  // Traces probes at `at` with a seed of their own (`salt`), counts them in the bake's figures and derings them.
+  auto trace = [&](const std::vector<glm::dvec3>& at, uint64_t salt, BakeStats& more) {
+    BakeOptions bake = options.bake;
+    bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
+    // The path budget is the whole bake's: added probes get what the earlier passes left.
+    bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
+    stage.reset();  // the bake and occlusion have progress of their own
+    std::vector<ShRgb> sh = bakeProbes(tracer, at, bake, &more);
+    stats.bake.intersectRays += more.intersectRays;
+    stats.bake.occludedRays += more.occludedRays;
+    stats.bake.paths += more.paths;
+    stats.bake.budgetPaths += more.budgetPaths;
+    stats.bake.seconds += more.seconds;
+    stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
+    deringProbes(sh, dering);
+    return sh;
+  };
+
   auto addProbes = [&](const std::vector<glm::dvec3>& added, uint64_t salt, LevelProbeKind kind,
                        bool reocclude = true, const TetMesh* given = nullptr) {
     probes.insert(probes.end(), added.begin(), added.end());
@@ -453,26 +471,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     spacing.insert(spacing.end(), added.size(), options.spacing);
     for (const glm::dvec3& p : added) level.probes.push_back(glm::vec3(p - level.origin));
     remesh(given);
-    BakeOptions bake = options.bake;
-    bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
-    // The path budget is the whole bake's: added probes get what the earlier passes left.
-    bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
-    stage.reset();  // the bake and occlusion have progress of their own
     BakeStats more;
-    std::vector<ShRgb> sh = bakeProbes(tracer, added, bake, &more);
-    stats.bake.intersectRays += more.intersectRays;
-    stats.bake.occludedRays += more.occludedRays;
-    stats.bake.paths += more.paths;
-    stats.bake.budgetPaths += more.budgetPaths;
-    stats.bake.seconds += more.seconds;
-    stats.bake.maxPathsPerProbe = std::max(stats.bake.maxPathsPerProbe, more.maxPathsPerProbe);
+    const std::vector<ShRgb> sh = trace(added, salt, more);
     if (!stats.bake.probeRelError.empty() || more.probeRelError.size() == added.size()) {
       stats.bake.probeRelError.resize(level.sh.size(), -1.0f);
       more.probeRelError.resize(added.size(), -1.0f);
       stats.bake.probeRelError.insert(stats.bake.probeRelError.end(), more.probeRelError.begin(),
                                       more.probeRelError.end());
     }
-    deringProbes(sh, dering);
     level.sh.insert(level.sh.end(), sh.begin(), sh.end());
     occlusionStale = options.occlusion.mode != OcclusionMode::kNone;
     if (reocclude && occlusionStale) {
@@ -525,17 +531,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
           level.probes[i] = glm::vec3(p - level.origin);
           at.push_back(p);
         }
-        BakeOptions bake = options.bake;
-        bake.seed = options.bake.seed ^ (0x3017eull * 0x9e3779b97f4a7c15ull);
-        bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
-        stage.reset();
         BakeStats more;
-        std::vector<ShRgb> sh = bakeProbes(tracer, at, bake, &more);
-        stats.bake.intersectRays += more.intersectRays;
-        stats.bake.occludedRays += more.occludedRays;
-        stats.bake.paths += more.paths;
-        stats.bake.seconds += more.seconds;
-        deringProbes(sh, dering);
+        const std::vector<ShRgb> sh = trace(at, 0x3017eull, more);
         std::vector<float>& noise = stats.bake.probeRelError;
         for (size_t k = 0; k < r.moved.size(); ++k) {
           level.sh[r.moved[k].first] = sh[k];
