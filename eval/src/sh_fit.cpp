@@ -50,6 +50,16 @@ double rowDot(const Row& r, const std::vector<double>& v) {
   return e;
 }
 
+// The same answer, channel c, from per-probe SH.
+double rowDot(const Row& r, const std::vector<ShRgb>& sh, int c) {
+  double e = 0.0;
+  for (int s = 0; s < 4; ++s) {
+    const ShRgb& x = sh[size_t(r.probe[s])];
+    for (int k = 0; k < kShCoeffCount; ++k) e += r.a[s][k] * double(x.c[size_t(k)][c]);
+  }
+  return e;
+}
+
 void rowScatter(const Row& r, double value, std::vector<double>& y) {
   for (int s = 0; s < 4; ++s) {
     double* x = &y[size_t(r.probe[s]) * kShCoeffCount];
@@ -277,13 +287,8 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
   // both).
   auto rowError = [&](const Row& r, const std::vector<ShRgb>& sh) {
     double e = 0.0;
-    for (int c = 0; c < 3; ++c) {
-      double v = 0.0;
-      for (int s = 0; s < 4; ++s)
-        for (int k = 0; k < kShCoeffCount; ++k)
-          v += r.a[s][k] * double(sh[size_t(r.probe[s])].c[size_t(k)][c]);
-      e += std::abs(std::log((std::max(v, 0.0) + f) / (std::max(r.target[c], 0.0) + f)));
-    }
+    for (int c = 0; c < 3; ++c)
+      e += std::abs(std::log((std::max(rowDot(r, sh, c), 0.0) + f) / (std::max(r.target[c], 0.0) + f)));
     return e / 3.0;
   };
 
@@ -317,17 +322,12 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
         stats.objectiveBefore += r.weight[c] * res * res;
       }
   // The data term at the result.
-  for (int c = 0; c < 3; ++c) {
-    std::vector<double> x(n);
-    for (size_t j = 0; j < np; ++j)
-      for (int k = 0; k < kShCoeffCount; ++k)
-        x[j * kShCoeffCount + size_t(k)] = double(out[j].c[size_t(k)][c]);
+  for (int c = 0; c < 3; ++c)
     for (const Row& r : rows)
       if (r.kind == Row::kFitted) {
-        const double res = r.target[c] - rowDot(r, x);
+        const double res = r.target[c] - rowDot(r, out, c);
         stats.objectiveAfter += r.weight[c] * res * res;
       }
-  }
   if (statsOut) *statsOut = stats;
   return out;
 }

@@ -53,12 +53,33 @@ double worstOf(const std::vector<glm::dvec3>& pts) {
   return meshQuality(pts, tetrahedralizeDelaunay(pts)).worstMinDihedralDeg;
 }
 
+// The worst min dihedral of the case's mesh before its late probes: the pass's bound.
+double earlyWorst(const LateCase& l) {
+  return worstOf(std::vector<glm::dvec3>(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate)));
+}
+
+// An inside test that vetoes every candidate.
+std::vector<uint8_t> allInside(const std::vector<glm::dvec3>& pts) {
+  return std::vector<uint8_t>(pts.size(), 1);
+}
+
+// The points a result keeps, where they now stand (moved ones moved), in their order, then its fillers: the
+// points its mesh is the Delaunay mesh of.
+std::vector<glm::dvec3> keptPoints(const LateCase& l, const FinalSliverResult& r) {
+  std::vector<glm::dvec3> at = l.points;
+  for (const auto& [i, p] : r.moved) at[i] = p;
+  std::vector<glm::dvec3> kept;
+  for (size_t i = 0; i < at.size(); ++i)
+    if (!std::binary_search(r.removed.begin(), r.removed.end(), i)) kept.push_back(at[i]);
+  kept.insert(kept.end(), r.added.begin(), r.added.end());
+  return kept;
+}
+
 // The invariant the bake relies on: whatever the late probes did, the final mesh's worst min dihedral is at
 // least the worst before them, and only late probes (never an earlier one) are dropped.
 TEST(LateSlivers, FinalWorstDihedralIsNoWorseThanBeforeLateProbes) {
   const LateCase l = latticeWithLateProbes(0.2);
-  const std::vector<glm::dvec3> early(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate));
-  const double bound = worstOf(early);
+  const double bound = earlyWorst(l);
   ASSERT_GT(bound, 1.0) << "the early mesh has the worst slivers: the case tests nothing";
   for (size_t budget : {size_t(0), size_t(20)}) {
     FinalSliverOptions o;
@@ -74,10 +95,7 @@ TEST(LateSlivers, FinalWorstDihedralIsNoWorseThanBeforeLateProbes) {
     for (size_t i : r.removed) EXPECT_GE(i, l.firstLate) << "an earlier probe was dropped";
     EXPECT_TRUE(std::is_sorted(r.removed.begin(), r.removed.end()));
     // The mesh is the Delaunay mesh of the kept points in their order, then the fillers.
-    std::vector<glm::dvec3> kept;
-    for (size_t i = 0; i < l.points.size(); ++i)
-      if (!std::binary_search(r.removed.begin(), r.removed.end(), i)) kept.push_back(l.points[i]);
-    kept.insert(kept.end(), r.added.begin(), r.added.end());
+    const std::vector<glm::dvec3> kept = keptPoints(l, r);
     EXPECT_EQ(tetrahedralizeDelaunay(kept).tets, r.mesh.tets);
     EXPECT_EQ(meshQuality(kept, r.mesh).worstMinDihedralDeg, r.after.worstMinDihedralDeg);
     // Deterministic.
@@ -93,16 +111,13 @@ TEST(LateSlivers, FinalWorstDihedralIsNoWorseThanBeforeLateProbes) {
 TEST(LateSlivers, FillersSpareLateProbesAndObeyTheInsideTest) {
   const LateCase l = latticeWithLateProbes(0.2);
   FinalSliverOptions o;
-  o.targetDeg =
-      worstOf(std::vector<glm::dvec3>(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate)));
+  o.targetDeg = earlyWorst(l);
   o.firstLate = l.firstLate;
   const FinalSliverResult none = fixFinalSlivers(l.points, l.spacing, o, nullptr);
   o.maxFillers = 200;
   const FinalSliverResult some = fixFinalSlivers(l.points, l.spacing, o, nullptr);
   EXPECT_LE(some.removed.size(), none.removed.size());
-  const FinalSliverResult vetoed =
-      fixFinalSlivers(l.points, l.spacing, o,
-                      [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
+  const FinalSliverResult vetoed = fixFinalSlivers(l.points, l.spacing, o, allInside);
   EXPECT_TRUE(vetoed.added.empty());
   EXPECT_EQ(vetoed.removed, none.removed);
 }
@@ -114,8 +129,7 @@ TEST(LateSlivers, FillersSpareLateProbesAndObeyTheInsideTest) {
 TEST(LateSlivers, MovesSpareLateProbesAndStillReachTheBound) {
   const LateCase l = latticeWithLateProbes(0.2);
   FinalSliverOptions o;
-  o.targetDeg =
-      worstOf(std::vector<glm::dvec3>(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate)));
+  o.targetDeg = earlyWorst(l);
   o.firstLate = l.firstLate;
   const FinalSliverResult none = fixFinalSlivers(l.points, l.spacing, o, nullptr);
   o.nudgeRounds = 4;
@@ -125,20 +139,14 @@ TEST(LateSlivers, MovesSpareLateProbesAndStillReachTheBound) {
   EXPECT_GE(moved.after.worstMinDihedralDeg, o.targetDeg);
   EXPECT_GT(moved.nudgeRounds, 0);
   EXPECT_LT(moved.removed.size(), none.removed.size());
-  std::vector<glm::dvec3> at = l.points;
   for (const auto& [i, p] : moved.moved) {
     EXPECT_GE(i, l.firstLate) << "an earlier probe was moved";
-    EXPECT_LE(glm::distance(p, l.points[i]), 4.0 * o.maxNudge * l.spacing[i] * (1.0 + 1e-9));
+    // At most maxNudge x spacing a round.
+    EXPECT_LE(glm::distance(p, l.points[i]), o.nudgeRounds * o.maxNudge * l.spacing[i] * (1.0 + 1e-9));
     EXPECT_FALSE(std::binary_search(moved.removed.begin(), moved.removed.end(), i));
-    at[i] = p;
   }
-  std::vector<glm::dvec3> kept;
-  for (size_t i = 0; i < at.size(); ++i)
-    if (!std::binary_search(moved.removed.begin(), moved.removed.end(), i)) kept.push_back(at[i]);
-  EXPECT_EQ(tetrahedralizeDelaunay(kept).tets, moved.mesh.tets);
-  const FinalSliverResult vetoed =
-      fixFinalSlivers(l.points, l.spacing, o,
-                      [](const std::vector<glm::dvec3>& pts) { return std::vector<uint8_t>(pts.size(), 1); });
+  EXPECT_EQ(tetrahedralizeDelaunay(keptPoints(l, moved)).tets, moved.mesh.tets);
+  const FinalSliverResult vetoed = fixFinalSlivers(l.points, l.spacing, o, allInside);
   EXPECT_TRUE(vetoed.moved.empty());
   EXPECT_EQ(vetoed.removed, none.removed);
 }

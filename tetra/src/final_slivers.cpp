@@ -54,6 +54,43 @@ glm::dvec3 fillerPoint(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dv
   return centroid;
 }
 
+// Step 1b's moves: each chosen corner v goes away from the faces opposite it in its slivers (the sum of their
+// unit normals turned towards v) by options.nudgeFraction x the slivers' mean edge, at most options.maxNudge x
+// its spacing. Appends the corners that have a direction to `which` and their new positions to `to`.
+void movesOffSlivers(const std::vector<glm::dvec3>& pos, const std::vector<double>& spc,
+                     const std::vector<std::array<int32_t, 4>>& slivers, const std::vector<uint8_t>& chosen,
+                     const FinalSliverOptions& options, std::vector<size_t>& which,
+                     std::vector<glm::dvec3>& to) {
+  std::vector<glm::dvec3> dir(pos.size(), glm::dvec3(0.0));
+  std::vector<double> edge(pos.size(), 0.0), n(pos.size(), 0.0);
+  for (const auto& t : slivers)
+    for (int k = 0; k < 4; ++k) {
+      const size_t v = size_t(t[size_t(k)]);
+      if (!chosen[v]) continue;
+      const glm::dvec3 a = pos[size_t(t[size_t((k + 1) % 4)])], b = pos[size_t(t[size_t((k + 2) % 4)])],
+                       c = pos[size_t(t[size_t((k + 3) % 4)])];
+      glm::dvec3 normal = glm::cross(b - a, c - a);
+      const double len = glm::length(normal);
+      if (!(len > 0.0)) continue;
+      normal /= len;
+      if (glm::dot(normal, pos[v] - a) < 0.0) normal = -normal;
+      dir[v] += normal;
+      double sum = 0.0;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j)
+          sum += glm::distance(pos[size_t(t[size_t(i)])], pos[size_t(t[size_t(j)])]);
+      edge[v] += sum / 6.0;
+      n[v] += 1.0;
+    }
+  for (size_t v = 0; v < pos.size(); ++v) {
+    const double len = glm::length(dir[v]);
+    if (!chosen[v] || !(len > 0.0) || !(n[v] > 0.0)) continue;
+    const double step = std::min(options.nudgeFraction * edge[v] / n[v], options.maxNudge * spc[v]);
+    which.push_back(v);
+    to.push_back(pos[v] + dir[v] / len * step);
+  }
+}
+
 }  // namespace
 
 FinalSliverResult fixFinalSlivers(
@@ -155,40 +192,12 @@ FinalSliverResult fixFinalSlivers(
       if (tetMinDihedral(pos, t) < target) slivers.push_back(t);
     return slivers;
   };
-  bad = countBelow(pos, r.mesh, target);
+  // `bad` counts the tets below the target in r.mesh (kept so by the filler rounds).
   for (int round = 0; round < options.nudgeRounds && bad > 0; ++round) {
     const std::vector<std::array<int32_t, 4>> slivers = sliversOf(r.mesh);
-    const std::vector<uint8_t> chosen = cover(slivers);
-    std::vector<glm::dvec3> dir(pos.size(), glm::dvec3(0.0));
-    std::vector<double> edge(pos.size(), 0.0), n(pos.size(), 0.0);
-    for (const auto& t : slivers)
-      for (int k = 0; k < 4; ++k) {
-        const size_t v = size_t(t[size_t(k)]);
-        if (!chosen[v]) continue;
-        const glm::dvec3 a = pos[size_t(t[size_t((k + 1) % 4)])], b = pos[size_t(t[size_t((k + 2) % 4)])],
-                         c = pos[size_t(t[size_t((k + 3) % 4)])];
-        glm::dvec3 normal = glm::cross(b - a, c - a);
-        const double len = glm::length(normal);
-        if (!(len > 0.0)) continue;
-        normal /= len;
-        if (glm::dot(normal, pos[v] - a) < 0.0) normal = -normal;
-        dir[v] += normal;
-        double sum = 0.0;
-        for (int i = 0; i < 4; ++i)
-          for (int j = i + 1; j < 4; ++j)
-            sum += glm::distance(pos[size_t(t[size_t(i)])], pos[size_t(t[size_t(j)])]);
-        edge[v] += sum / 6.0;
-        n[v] += 1.0;
-      }
     std::vector<size_t> which;
     std::vector<glm::dvec3> cand;
-    for (size_t v = 0; v < pos.size(); ++v) {
-      const double len = glm::length(dir[v]);
-      if (!chosen[v] || !(len > 0.0) || !(n[v] > 0.0)) continue;
-      const double step = std::min(options.nudgeFraction * edge[v] / n[v], options.maxNudge * spc[v]);
-      which.push_back(v);
-      cand.push_back(pos[v] + dir[v] / len * step);
-    }
+    movesOffSlivers(pos, spc, slivers, cover(slivers), options, which, cand);
     if (cand.empty()) break;
     std::vector<uint8_t> in(cand.size(), 0);
     if (inside) in = inside(cand);

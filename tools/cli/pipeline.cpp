@@ -589,6 +589,24 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   };
   const bool baked = options.importShCsv.empty();
 
+  // One hole round (occlusion_holes.h) with `ho` (its spacing set here), logged in `log`; its probes are baked
+  // with `salt`. False when it proposed none (the rounds stop there).
+  auto holeRound = [&](OcclusionHoleOptions ho, const std::string& label, uint64_t salt,
+                       std::vector<PipelineStats::HoleRound>& log) {
+    ho.spacing = options.spacing;
+    stage.emplace(label, 0, "", show);
+    const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
+    log.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size(), holes.seenPoints});
+    stage.reset();
+    if (holes.probes.empty()) return false;
+    stats.holeProbes += holes.probes.size();
+    addProbes(holes.probes, salt, LevelProbeKind::kHole);
+    return true;
+  };
+  auto roundLabel = [](const std::string& what, int round, int rounds) {
+    return what + "round " + std::to_string(round + 1) + " of " + std::to_string(rounds) + ")";
+  };
+
   // The rounds aimed at the lookup's fallback, once the hole and refinement probes are in (before the late
   // sliver pass, which bounds the tets of every probe added after the fillers).
   auto lookupHoles = [&] {
@@ -601,18 +619,11 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     }
     for (int round = 0; round < options.lookupHoleRounds; ++round) {
       OcclusionHoleOptions ho;
-      ho.spacing = options.spacing;
       ho.seed = options.bake.seed ^ (0x100c5ull + uint64_t(round));
       ho.lookupOnly = true;
-      stage.emplace("holes (lookup, round " + std::to_string(round + 1) + " of " +
-                        std::to_string(options.lookupHoleRounds) + ")",
-                    0, "", show);
-      const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
-      stats.lookupHoleRounds.push_back({holes.pointsChecked, holes.holePoints, holes.probes.size(), 0});
-      stage.reset();
-      if (holes.probes.empty()) break;
-      stats.holeProbes += holes.probes.size();
-      addProbes(holes.probes, 0x100c5ull + uint64_t(round), LevelProbeKind::kHole);
+      if (!holeRound(ho, roundLabel("holes (lookup, ", round, options.lookupHoleRounds),
+                     0x100c5ull + uint64_t(round), stats.lookupHoleRounds))
+        break;
     }
     timer.mark("holes (lookup)");
   };
@@ -621,19 +632,11 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   if (options.holeRounds > 0 && options.occlusion.mode != OcclusionMode::kNone && baked) {
     for (int round = 0; round < options.holeRounds; ++round) {
       OcclusionHoleOptions ho;
-      ho.spacing = options.spacing;
       ho.seed = options.bake.seed ^ (0x401e5ull + uint64_t(round));
       ho.onlyUnseen = options.holesOnlyUnseen;
-      stage.emplace(
-          "holes (round " + std::to_string(round + 1) + " of " + std::to_string(options.holeRounds) + ")", 0,
-          "", show);
-      const OcclusionHoles holes = findOcclusionHoles(tracer, level, ho);
-      stats.holeRounds.push_back(
-          {holes.pointsChecked, holes.holePoints, holes.probes.size(), holes.seenPoints});
-      stage.reset();
-      if (holes.probes.empty()) break;
-      stats.holeProbes += holes.probes.size();
-      addProbes(holes.probes, 0xb01e5ull + uint64_t(round), LevelProbeKind::kHole);
+      if (!holeRound(ho, roundLabel("holes (", round, options.holeRounds), 0xb01e5ull + uint64_t(round),
+                     stats.holeRounds))
+        break;
     }
     timer.mark("holes");
   }
