@@ -6,6 +6,8 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <set>
+#include <utility>
 
 #include "tetraprobe/runtime/face_blend.h"
 #include "tetraprobe/runtime/query.h"
@@ -443,12 +445,19 @@ void GpuSectorPool::linkFaces(int32_t slot) {
 }
 
 void GpuSectorPool::writeStarHeaders(const std::vector<int32_t>& slots) {
-  // The probe flags of a tet read its probes' stars (face_blend.h): every tet of the stars around these.
+  // The probe flags of a tet read its probes' stars (face_blend.h): every tet of the stars around these. A star
+  // is walked once: (probe, tet) pairs a complete walk reached are skipped (a resident star may be in pieces,
+  // so the pair, not the probe alone, says the piece was walked; a walk cut at kFaceBlendStarTets marks none).
   std::vector<int32_t> touched;
+  std::set<std::pair<int32_t, int32_t>> walked;  // (probe, tet)
   for (int32_t s : slots)
     for (int i = 0; i < 4; ++i) {
+      const int32_t probe = pool_.tets[size_t(s)].v[i];
+      if (walked.count({probe, s})) continue;
       const std::vector<int32_t> star = faceBlendStar(pool_, s, i);
       touched.insert(touched.end(), star.begin(), star.end());
+      if (star.size() < size_t(kFaceBlendStarTets))
+        for (int32_t t : star) walked.insert({probe, t});
     }
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
