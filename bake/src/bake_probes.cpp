@@ -7,14 +7,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include <glm/geometric.hpp>
 
+#include "patch_guide.h"
 #include "path_tracer.h"
 #include "probe_bake.h"
 #include "probe_guide.h"
@@ -123,9 +126,10 @@ void addEmitterSamples(const SceneTracer& tracer, const glm::vec3& probe, size_t
 
 // Adaptive sampling (BakeOptions::targetRelError): the running state of one probe.
 struct AdaptiveProbe {
-  double acc[kShCoeffCount][3] = {};  // sum over batches of the batch SH
-  int batches = 0;
-  double mean[6] = {}, m2[6] = {};  // Welford over batches of Y(E(n)) at the six axis normals
+  double acc[kShCoeffCount][3] = {};  // sum over the estimated batches of the batch SH
+  int batches = 0;    // batches traced (they key the random streams and count against the caps)
+  int estimated = 0;  // the last `estimated` of them, which acc, mean and m2 hold (restartEstimate)
+  double mean[6] = {}, m2[6] = {};  // Welford over those batches of Y(E(n)) at the six axis normals
 };
 
 constexpr uint64_t kBatchRotationTag = 1ull << 62;
@@ -157,8 +161,52 @@ int passOneBatches(const BakeOptions& options) {
 struct GuideSlot {
   GuideHistogram histogram;
   ProbeGuide guide;
-  int batches = 0;  // batches recorded in `histogram`
+  PatchHistogram patches;  // lit-patch sampling (BakeOptions::litPatches): the first hits' lit patches
+  PatchGuide patchGuide;
+  bool litPatches = false;  // this probe takes lit-patch sampling in this pass (needsLitPatches)
+  int batches = 0;          // batches recorded in `histogram`
 };
+
+// Whether a probe entering a pass with state st takes lit-patch sampling: only one that would stop at
+// `capBatches` above the target at its present rate (batches x (error / target)^2 > capBatches), since its
+// points and the bounces' points cost rays that a probe on its way to the target does not need. Its own
+// state only, so the same wherever it is baked.
+bool needsLitPatches(const AdaptiveProbe& st, double error, double target, int capBatches) {
+  if (!(error > target)) return false;
+  if (!std::isfinite(error)) return true;
+  const double ratio = error / target;
+  return double(st.batches) * ratio * ratio > double(capBatches);
+}
+
+constexpr uint64_t kPatchSampleTag = 1ull << 59;
+// Lit-patch points a batch draws, against its kBakeBatchSize sphere directions.
+constexpr int kPatchSamples = 32;
+
+// The voxel a point's lit-map cell belongs to (patch_guide.h).
+uint64_t litVoxel(const LitMap& map, uint32_t triangle, float u, float v) {
+  return map.voxelOf(triangle, cellOf(u, v, map.cellsPerEdge(triangle)));
+}
+
+// The voxel edge of lit-patch sampling's map for a bake of `probes`: cbrt(box volume / probes), the box of
+// the traced probes with each axis floored at 1e-3 of the largest (about the probe spacing); its cells are
+// a quarter of that on an edge; 1 for a degenerate set.
+double litVoxelEdge(const std::vector<glm::dvec3>& probes, const std::function<bool(size_t)>& skipped) {
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  size_t count = 0;
+  for (size_t i = 0; i < probes.size(); ++i) {
+    if (skipped(i)) continue;
+    lo = glm::min(lo, probes[i]);
+    hi = glm::max(hi, probes[i]);
+    ++count;
+  }
+  if (count == 0) return 1.0;
+  const glm::dvec3 e = hi - lo;
+  const double top = std::max({e.x, e.y, e.z});
+  if (!(top > 0.0) || !std::isfinite(top)) return 1.0;
+  const double f = 1e-3 * top;
+  const double edge = std::cbrt(std::max(e.x, f) * std::max(e.y, f) * std::max(e.z, f) / double(count));
+  return edge > 0.0 && std::isfinite(edge) ? edge : 1.0;
+}
 
 // Whether batch b of a probe takes part in guiding (recorded, and guided once kGuideLearnBatches are in):
 // adaptive sampling asked for it and the first samplesPerProbe paths (pass 1, which every probe takes) are
@@ -167,18 +215,41 @@ bool guidedBatch(const BakeOptions& options, int b) {
   return options.guide && options.targetRelError > 0.0 && b >= passOneBatches(options);
 }
 
+// A probe taking lit-patch sampling restarts its estimate at its first guided batch: the batches before it
+// (pass 1 and the guides' learning batches, drawn without a guide) stay traced but leave the estimate, which
+// from then on averages guided batches only. Those few unguided batches would otherwise hold most of the
+// estimate's variance (on a room lit through its roof, such a probe's unguided batches vary by 60 %, its
+// guided ones by 10 %). Unbiased: each batch is, and which batches count depends only on when the guide
+// started, not on their values. (Other probes keep every batch, so levels without point, spot or sun lights
+// bake as before.)
+void restartEstimate(AdaptiveProbe& st) {
+  for (auto& row : st.acc)
+    for (double& v : row) v = 0.0;
+  for (int k = 0; k < 6; ++k) st.mean[k] = st.m2[k] = 0.0;
+  st.estimated = 0;
+}
+
 void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options,
-              AdaptiveProbe& st, GuideSlot* slot = nullptr) {
+              const LitMap* litMap, AdaptiveProbe& st, GuideSlot* slot = nullptr) {
   const TraceSettings settings{options.bounces, options.content};
   const uint64_t b = uint64_t(st.batches);
   const glm::dmat3 rotation = probeRotation(streamKey(options.seed, index, kBatchRotationTag | b));
   const bool emitters = samplesEmitters(tracer, options);
   const ProbeGuide* guide = nullptr;
   const bool learn = slot && guidedBatch(options, st.batches);
+  // Lit-patch sampling weighs the first hit's punctual light, which the path takes only with a bounce and
+  // indirect light in the content.
+  const bool patches = learn && litMap != nullptr && slot->litPatches;
+  const PatchGuide* patchGuide = nullptr;
   if (learn && slot->batches >= kGuideLearnBatches) {
-    if (slot->batches % kGuideLearnBatches == 0) slot->guide = ProbeGuide(slot->histogram);
+    if (slot->batches % kGuideLearnBatches == 0) {
+      slot->guide = ProbeGuide(slot->histogram);
+      if (patches) slot->patchGuide = PatchGuide(slot->patches, tracer, *litMap);
+    }
     if (slot->guide.active()) guide = &slot->guide;
+    if (patches && slot->patchGuide.active()) patchGuide = &slot->patchGuide;
   }
+  if (patches && (guide || patchGuide) && st.estimated == st.batches) restartEstimate(st);
   // Unguided: kBakeBatchSize uniform directions, density 1 / (4 pi). Guided: half uniform, half from the
   // guide; every direction weighted by the mixture's density (n_u / 4 pi + n_g p_g) / n, which also
   // stands for the sphere in the emitter samples' MIS.
@@ -187,7 +258,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
   double acc[kShCoeffCount][3] = {};
   for (int k = 0; k < kBakeBatchSize; ++k) {
     glm::vec3 d;
-    if (k < uniformCount) {
+    if (k < uniformCount || guide == nullptr) {
       d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
     } else {
       Rng pick(streamKey(options.seed, index, kGuideDirectionTag | (b * kBakeBatchSize + uint64_t(k))));
@@ -201,15 +272,54 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
     }
     const float pdf = sphereDirectionPdf(guide, d);
     Rng rng(streamKey(options.seed, index, b * kBakeBatchSize + uint64_t(k) + 1));
-    const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, settings, rng);
+    FirstHit first;
+    TraceSettings traced = settings;
+    if (patches) {
+      first.patches = patchGuide;
+      first.sphereWeight = float(kBakeBatchSize) * pdf;
+      first.patchWeight = float(kPatchSamples);
+      first.bounces = options.litPatches == LitPatches::kBounces;
+      traced.firstHit = &first;
+    }
+    const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, traced, rng);
     const auto y = shBasis<double>(d.x, d.y, d.z);
     const double w = guide ? double(kSpherePdf) / double(pdf) : 1.0;  // in units of a uniform sample
     if (learn) slot->histogram.add(d, luminance(glm::dvec3(l)) * w);
+    if (patches && litMap && first.hit && maxComponent(first.radiance) > 0.0f)
+      slot->patches.add(litVoxel(*litMap, first.triangle, first.u, first.v),
+                        double(luminance(first.radiance)) * first.weight / (double(kBakeBatchSize) * pdf));
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * w * y[size_t(i)];
   }
   if (emitters)
     addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc, guide);
+  // Lit-patch points: each MIS-weighted against the sphere directions' density there, in the units of the
+  // sphere sum (L Y / (4 pi p) a direction; n_sphere / n_patch of that a point).
+  for (int k = 0; patchGuide && litMap && slot && k < kPatchSamples; ++k) {
+    Rng rng(streamKey(options.seed, index, kPatchSampleTag | (b * kPatchSamples + uint64_t(k))));
+    const double u1 = (double(k) + rng.uniformDouble()) / double(kPatchSamples);
+    const double u2 = rng.uniformDouble();
+    const float u3 = rng.uniform(), u4 = rng.uniform();
+    const PatchPoint pt = patchGuide->sample(u1, u2, u3, u4);
+    const glm::vec3 to = tracer.impl().pointOn(pt.triangle, pt.u, pt.v) - probe;
+    const float dist = glm::length(to);
+    if (!(dist > 0.0f) || !(pt.pdfArea > 0.0f)) continue;
+    const glm::vec3 d = to / dist;
+    const float cosY = std::abs(glm::dot(tracer.impl().normals[pt.triangle], d));
+    if (!(cosY > 0.0f)) continue;
+    const glm::vec3 l = patchPointRadiance(tracer, probe, pt.triangle, pt.u, pt.v, d, dist, rng);
+    if (!(maxComponent(l) > 0.0f)) continue;
+    const float pdf = pt.pdfArea * dist * dist / cosY;
+    const float weight =
+        powerHeuristic(float(kPatchSamples) * pdf, float(kBakeBatchSize) * sphereDirectionPdf(guide, d));
+    const double scale = double(weight) * double(kBakeBatchSize) /
+                         (double(kPatchSamples) * double(pdf) * 4.0 * std::numbers::pi);
+    const auto y = shBasis<double>(d.x, d.y, d.z);
+    for (int i = 0; i < kShCoeffCount; ++i)
+      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * scale * y[size_t(i)];
+    slot->patches.add(litVoxel(*litMap, pt.triangle, pt.u, pt.v),
+                      double(luminance(l)) * weight / (double(kPatchSamples) * double(pdf)));
+  }
   const double scale = 4.0 * std::numbers::pi / kBakeBatchSize;
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -220,9 +330,10 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
   double q[6];
   axisLuminance(acc, q);
   ++st.batches;
+  ++st.estimated;
   for (int k = 0; k < 6; ++k) {
     const double delta = q[k] - st.mean[k];
-    st.mean[k] += delta / double(st.batches);
+    st.mean[k] += delta / double(st.estimated);
     st.m2[k] += delta * (q[k] - st.mean[k]);
   }
 }
@@ -236,9 +347,10 @@ double adaptiveMean(const AdaptiveProbe& st) {
 
 // The achieved relative standard error (BakeOptions::targetRelError), against max(mean, floor).
 double adaptiveRelError(const AdaptiveProbe& st, double floor) {
-  if (st.batches < 2) return std::numeric_limits<double>::infinity();
+  if (st.estimated < 2) return std::numeric_limits<double>::infinity();
   double se = 0.0;
-  for (int k = 0; k < 6; ++k) se = std::max(se, std::sqrt(st.m2[k] / double(st.batches - 1) / st.batches));
+  for (int k = 0; k < 6; ++k)
+    se = std::max(se, std::sqrt(st.m2[k] / double(st.estimated - 1) / st.estimated));
   const double denom = std::max(std::abs(adaptiveMean(st)), floor);
   return denom > 0.0 ? se / denom : (se > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
 }
@@ -247,7 +359,7 @@ ShRgb adaptiveSh(const SceneTracer& tracer, const glm::vec3& probe, const BakeOp
                  const AdaptiveProbe& st) {
   ShRgb sh;
   for (int i = 0; i < kShCoeffCount; ++i)
-    for (int c = 0; c < 3; ++c) sh.c[size_t(i)][c] = float(st.acc[i][c] / std::max(st.batches, 1));
+    for (int c = 0; c < 3; ++c) sh.c[size_t(i)][c] = float(st.acc[i][c] / std::max(st.estimated, 1));
   if (options.content & kContentDirectPunctual) addPunctualSh(tracer, probe, sh);
   return sh;
 }
@@ -349,6 +461,7 @@ void copySums(const From& from, To& to) {
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int c = 0; c < 3; ++c) to.acc[i][c] = from.acc[i][c];
   to.batches = from.batches;
+  to.estimated = from.estimated;
   for (int k = 0; k < 6; ++k) {
     to.mean[k] = from.mean[k];
     to.m2[k] = from.m2[k];
@@ -413,6 +526,20 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         body();
       }
     };
+    // The lit map of lit-patch sampling, built on first use (a merge whose probes all reached their target
+    // traces none); the same in every process of a sharded bake (a pure function of the scene, the probes
+    // and the seed).
+    std::optional<LitMap> lit;
+    const bool usesLitMap = options.guide && options.litPatches != LitPatches::kOff && options.bounces >= 1 &&
+                            (options.content & kContentIndirect) && !tracer.scene().lights.empty();
+    const LitMap* litMapUsed = nullptr;  // set (serially) before each pass that guides
+    auto buildLitMap = [&] {
+      if (usesLitMap && !lit) {
+        const double voxel = litVoxelEdge(probes, skipped);
+        lit.emplace(tracer, voxel * voxel / 16.0, voxel, options.seed, options.threads);
+      }
+      if (lit) litMapUsed = &*lit;
+    };
     double floor = 0.0;
     achieved.assign(probes.size(), -1.0);
     if (role.resume) {
@@ -429,7 +556,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
                             : skipped(i)       ? " that is not traced"
                                                : " given twice"));
         const ProbeBakeState& s = r.states[k];
-        if (s.batches < minBatches || s.batches > maxBatches)
+        if (s.batches < minBatches || s.batches > maxBatches || s.estimated < 0 || s.estimated > s.batches)
           throw InputError("bake merge: shard state for probe " + std::to_string(i) + " is inconsistent");
         seen[i] = 1;
         copySums(s, state[i]);
@@ -452,7 +579,8 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         std::vector<uint8_t> seen(probes.size(), 0);
         for (size_t k = 0; k < r.probes.size() && k < r.states.size(); ++k) {
           const uint32_t i = r.probes[k];
-          if (i >= probes.size() || skipped(i) || !own(i) || seen[i] || r.states[k].batches != minBatches)
+          if (i >= probes.size() || skipped(i) || !own(i) || seen[i] || r.states[k].batches != minBatches ||
+              r.states[k].estimated != minBatches)
             throw InputError("bake: round-1 state for probe " + std::to_string(i) +
                              " does not belong to this shard");
           seen[i] = 1;
@@ -472,7 +600,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           run(i, [&] {
             DenormalScope denormals;
             while (state[i].batches < minBatches)
-              addBatch(tracer, glm::vec3(probes[i]), i, options, state[i]);
+              addBatch(tracer, glm::vec3(probes[i]), i, options, nullptr, state[i]);
           });
           if (progress) progress->advance();
         });
@@ -486,6 +614,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         floor = std::numeric_limits<double>::quiet_NaN();  // not known until every shard's pass 1 is
         std::fill(achieved.begin(), achieved.end(), -1.0);
       }
+      if (!role.pass1Only) buildLitMap();
       if (options.progress && !role.pass1Only)
         progress = std::make_unique<Progress>("bake (to target)", traced(true), "probes");
       parallelFor(role.pass1Only ? 0 : probes.size(), options.threads, [&](size_t i) {
@@ -497,8 +626,10 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
           GuideSlot guide;
+          guide.litPatches =
+              needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
           while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, st, &guide);
+            addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;
@@ -540,6 +671,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       if (open.empty()) break;
       const uint64_t share = (budgetBatches - used) / open.size();
       if (share == 0) break;
+      buildLitMap();
       if (options.progress)
         progress = std::make_unique<Progress>("bake (path budget)", open.size(), "probes");
       parallelFor(open.size(), options.threads, [&](size_t k) {
@@ -549,8 +681,9 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           AdaptiveProbe& st = state[i];
           const int stop = int(std::min<uint64_t>(uint64_t(ceilingBatches), uint64_t(st.batches) + share));
           GuideSlot guide;
+          guide.litPatches = needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop);
           while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, st, &guide);
+            addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;

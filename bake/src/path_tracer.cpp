@@ -48,46 +48,91 @@ float spotFactor(const Light& l, const glm::vec3& toPoint) {
   return smoothstep(std::cos(l.outerConeRad), std::cos(l.innerConeRad), c);
 }
 
+namespace {
+
+// One light's term of punctualIrradiance (the same random numbers, in the same order).
+glm::vec3 lightIrradiance(const SceneTracer& tracer, const Light& l, const glm::vec3& x,
+                          const glm::vec3& origin, const glm::vec3& n, Rng& rng) {
+  const float eps = tracer.rayEpsilon();
+  if (l.type == LightType::kDirectional) {
+    const glm::vec3 axis = -glm::normalize(l.direction);
+    glm::vec3 w = axis;
+    if (l.angularRadiusRad > 0.0f) {
+      const float u1 = rng.uniform(), u2 = rng.uniform();
+      w = uniformCone(axis, std::cos(l.angularRadiusRad), u1, u2);
+    }
+    const float c = glm::dot(n, w);
+    if (c <= 0.0f) return glm::vec3(0.0f);
+    const float through = tracer.transmittance(origin, w, 0.0f, kInfinity);
+    if (through <= 0.0f) return glm::vec3(0.0f);
+    return through < 1.0f ? l.intensity * (c * through) : l.intensity * c;
+  }
+  const glm::vec3 d = l.position - x;
+  const float r2 = glm::dot(d, d);
+  if (!(r2 > 0.0f)) return glm::vec3(0.0f);
+  const glm::vec3 w = d / std::sqrt(r2);
+  const float c = glm::dot(n, w);
+  if (c <= 0.0f) return glm::vec3(0.0f);
+  const float spot = spotFactor(l, -w);
+  if (spot <= 0.0f) return glm::vec3(0.0f);
+  glm::vec3 target = l.position;
+  if (l.radius > 0.0f) {
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    target += uniformSphere(u1, u2) * l.radius;
+  }
+  const glm::vec3 s = target - origin;
+  const float dist = glm::length(s);
+  const float through = dist > eps ? tracer.transmittance(origin, s / dist, 0.0f, dist - eps) : 1.0f;
+  if (through <= 0.0f) return glm::vec3(0.0f);
+  return through < 1.0f ? l.intensity * (spot * c / r2 * through) : l.intensity * (spot * c / r2);
+}
+
+// A light's weight in punctualIrradianceOneLight: the luminance of its unshadowed irradiance at x (normal n),
+// positive wherever the light can reach x: a point or spot light's cosine, falloff and cone do not depend on
+// its radius' jitter; a sun's cosine is taken as cos(axis) + sin(disc radius), positive wherever a direction
+// in its disc is above the surface.
+float lightBound(const Light& l, const glm::vec3& x, const glm::vec3& n) {
+  const float y = luminance(l.intensity);
+  if (!(y > 0.0f)) return 0.0f;
+  if (l.type == LightType::kDirectional) {
+    const float c = glm::dot(n, -glm::normalize(l.direction)) + std::sin(std::max(l.angularRadiusRad, 0.0f));
+    return c > 0.0f ? y * std::min(c, 1.0f) : 0.0f;
+  }
+  const glm::vec3 d = l.position - x;
+  const float r2 = glm::dot(d, d);
+  if (!(r2 > 0.0f)) return 0.0f;
+  const glm::vec3 w = d / std::sqrt(r2);
+  const float c = glm::dot(n, w);
+  if (c <= 0.0f) return 0.0f;
+  return y * spotFactor(l, -w) * c / r2;
+}
+
+}  // namespace
+
 glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
                              const glm::vec3& n, Rng& rng) {
-  const Scene& scene = tracer.scene();
-  const float eps = tracer.rayEpsilon();
   glm::vec3 e(0.0f);
-  for (const Light& l : scene.lights) {
-    if (l.type == LightType::kDirectional) {
-      const glm::vec3 axis = -glm::normalize(l.direction);
-      glm::vec3 w = axis;
-      if (l.angularRadiusRad > 0.0f) {
-        const float u1 = rng.uniform(), u2 = rng.uniform();
-        w = uniformCone(axis, std::cos(l.angularRadiusRad), u1, u2);
-      }
-      const float c = glm::dot(n, w);
-      if (c <= 0.0f) continue;
-      const float through = tracer.transmittance(origin, w, 0.0f, kInfinity);
-      if (through <= 0.0f) continue;
-      e += through < 1.0f ? l.intensity * (c * through) : l.intensity * c;
-      continue;
-    }
-    const glm::vec3 d = l.position - x;
-    const float r2 = glm::dot(d, d);
-    if (!(r2 > 0.0f)) continue;
-    const glm::vec3 w = d / std::sqrt(r2);
-    const float c = glm::dot(n, w);
-    if (c <= 0.0f) continue;
-    const float spot = spotFactor(l, -w);
-    if (spot <= 0.0f) continue;
-    glm::vec3 target = l.position;
-    if (l.radius > 0.0f) {
-      const float u1 = rng.uniform(), u2 = rng.uniform();
-      target += uniformSphere(u1, u2) * l.radius;
-    }
-    const glm::vec3 s = target - origin;
-    const float dist = glm::length(s);
-    const float through = dist > eps ? tracer.transmittance(origin, s / dist, 0.0f, dist - eps) : 1.0f;
-    if (through <= 0.0f) continue;
-    e += through < 1.0f ? l.intensity * (spot * c / r2 * through) : l.intensity * (spot * c / r2);
-  }
+  for (const Light& l : tracer.scene().lights) e += lightIrradiance(tracer, l, x, origin, n, rng);
   return e;
+}
+
+glm::vec3 punctualIrradianceOneLight(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
+                                     const glm::vec3& n, Rng& rng) {
+  const std::vector<Light>& lights = tracer.scene().lights;
+  if (lights.size() == 1) return lightIrradiance(tracer, lights[0], x, origin, n, rng);
+  double total = 0.0;
+  for (const Light& l : lights) total += double(lightBound(l, x, n));
+  if (!(total > 0.0)) return glm::vec3(0.0f);
+  double pick = rng.uniformDouble() * total;
+  for (size_t k = 0; k < lights.size(); ++k) {
+    const double b = double(lightBound(lights[k], x, n));
+    if (!(b > 0.0)) continue;
+    if (pick < b || k + 1 == lights.size()) {
+      return lightIrradiance(tracer, lights[k], x, origin, n, rng) * float(total / b);
+    }
+    pick -= b;
+  }
+  return glm::vec3(0.0f);  // rounding past the last light with a bound: none is lit there
 }
 
 bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng, EmitterSample& out) {
@@ -112,6 +157,27 @@ bool sampleEmitter(const SceneTracer& tracer, const glm::vec3& origin, Rng& rng,
   return true;
 }
 
+glm::vec3 patchPointRadiance(const SceneTracer& tracer, const glm::vec3& probe, uint32_t triangle, float u,
+                             float v, const glm::vec3& dir, float dist, Rng& rng) {
+  const SceneTracer::Impl& impl = tracer.impl();
+  if (tracer.isHole(triangle, u, v)) return glm::vec3(0.0f);
+  const Material& m = impl.material(triangle);
+  // A transmissive surface reflects only when a path does not pass it (probability 1 - transmission).
+  const float reflect = 1.0f - std::min(m.transmission, 1.0f);
+  if (maxComponent(m.albedo) <= 0.0f || !(reflect > 0.0f)) return glm::vec3(0.0f);
+  const glm::vec3 nt = impl.normals[triangle];
+  const float side = glm::dot(nt, dir);
+  if (side == 0.0f || !std::isfinite(side)) return glm::vec3(0.0f);
+  const glm::vec3 n = side < 0.0f ? nt : -nt;  // the side the probe sees
+  const float eps = impl.rayEpsilon;
+  const glm::vec3 y = impl.pointOn(triangle, u, v);
+  const float through = dist > eps ? tracer.transmittance(probe, dir, 0.0f, dist - eps) : 1.0f;
+  if (through <= 0.0f) return glm::vec3(0.0f);
+  const glm::vec3 p = y + n * eps;
+  const glm::vec3 e = punctualIrradianceOneLight(tracer, p, p, n, rng);
+  return m.albedo * (kInvPi * reflect * through) * e;
+}
+
 float emitterTransmittance(const SceneTracer& tracer, const glm::vec3& origin, const EmitterSample& s) {
   const float eps = tracer.rayEpsilon();
   return s.dist > eps ? tracer.transmittance(origin, s.dir, 0.0f, s.dist - eps) : 1.0f;
@@ -130,6 +196,10 @@ glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin,
   return through < 1.0f ? e * through : e;
 }
 
+// Hits of a probe's path that draw a lit-patch point (the first three: the light of further bounces is a
+// small share, not worth two rays a hit).
+constexpr int kLitPatchVertices = 3;
+
 glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& dir,
                            float prevPdf, const TraceSettings& settings, Rng& rng) {
   const SceneTracer::Impl& impl = tracer.impl();
@@ -137,6 +207,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
   const float eps = impl.rayEpsilon;
   glm::vec3 radiance(0.0f), throughput(1.0f);
   glm::vec3 o = origin, d = dir;
+  const PatchGuide* bouncePatches = nullptr;  // set at the first hit when it drew a lit-patch point
   float tnear = 0.0f;  // > 0 after stepping through transmissive surfaces: the ray resumes past them
   for (int vertex = 0;; ++vertex) {
     const bool direct = vertex == 0;
@@ -176,9 +247,56 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
     }
     const glm::vec3 n = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
     const glm::vec3 p = impl.pointOn(hit.triangle, hit.u, hit.v) + n * eps;
-    const glm::vec3 irradiance =
-        emissiveIrradiance(tracer, p, n, rng) + punctualIrradiance(tracer, p, p, n, rng);
+    glm::vec3 punctual = punctualIrradiance(tracer, p, p, n, rng);
+    if (direct && settings.firstHit) {
+      FirstHit& f = *settings.firstHit;
+      f.hit = true;
+      f.triangle = hit.triangle;
+      f.u = hit.u;
+      f.v = hit.v;
+      f.radiance = throughput * m.albedo * kInvPi * punctual;
+      f.weight = 1.0f;
+      if (f.patches && maxComponent(f.radiance) > 0.0f) {
+        const float pdfArea = f.patches->pdfArea(hit.triangle, hit.u, hit.v);
+        const float cosY = std::abs(glm::dot(hit.geometricNormal, d));
+        if (pdfArea > 0.0f && cosY > 0.0f)
+          f.weight = powerHeuristic(f.sphereWeight, f.patchWeight * pdfArea * hit.t * hit.t / cosY);
+      }
+      punctual *= f.weight;
+    } else if (bouncePatches) {
+      // A later hit, reached by a cosine direction from a hit that drew a lit-patch point: its punctual light
+      // against that point (one each, power heuristic).
+      const float pdfArea = bouncePatches->pdfArea(hit.triangle, hit.u, hit.v);
+      const float cosY = std::abs(glm::dot(hit.geometricNormal, d));
+      if (pdfArea > 0.0f && cosY > 0.0f && maxComponent(punctual) > 0.0f)
+        punctual *= powerHeuristic(prevPdf, pdfArea * hit.t * hit.t / cosY);
+    }
+    const glm::vec3 irradiance = emissiveIrradiance(tracer, p, n, rng) + punctual;
     radiance += throughput * m.albedo * kInvPi * irradiance;
+    bouncePatches = nullptr;
+    if (settings.firstHit && settings.firstHit->patches && settings.firstHit->bounces &&
+        vertex < kLitPatchVertices && vertex + 1 < settings.bounces) {
+      // Light through a lit patch one bounce more: a point drawn by the probe's guide (the lit surfaces the
+      // probe sees, which the first hits around it mostly see too), its one-bounce light reflected here,
+      // MIS-weighted against the cosine direction that follows.
+      bouncePatches = settings.firstHit->patches;
+      const double g1 = rng.uniformDouble(), g2 = rng.uniformDouble();
+      const float g3 = rng.uniform(), g4 = rng.uniform();
+      const PatchPoint pt = bouncePatches->sample(g1, g2, g3, g4);
+      const glm::vec3 to = impl.pointOn(pt.triangle, pt.u, pt.v) - p;
+      const float dist = glm::length(to);
+      if (dist > 0.0f && pt.pdfArea > 0.0f) {
+        const glm::vec3 w = to / dist;
+        const float cosX = glm::dot(n, w), cosZ = std::abs(glm::dot(impl.normals[pt.triangle], w));
+        if (cosX > 0.0f && cosZ > 0.0f) {
+          const glm::vec3 l = patchPointRadiance(tracer, p, pt.triangle, pt.u, pt.v, w, dist, rng);
+          const float pdf = pt.pdfArea * dist * dist / cosZ;
+          if (maxComponent(l) > 0.0f)
+            radiance +=
+                throughput * m.albedo * l * (kInvPi * cosX * powerHeuristic(pdf, cosX * kInvPi) / pdf);
+        }
+      }
+    }
     const float u1 = rng.uniform(), u2 = rng.uniform();
     d = cosineHemisphere(n, u1, u2);
     prevPdf = std::max(glm::dot(n, d), 1e-12f) * kInvPi;

@@ -12,15 +12,42 @@
 
 #include <glm/vec3.hpp>
 
+#include "patch_guide.h"
 #include "rng.h"
 #include "tetraprobe/bake/tracer.h"
 
 namespace tetraprobe::bake_detail {
 
+// A probe's sphere direction in lit-patch sampling (patch_guide.h): in, the patches and the two techniques'
+// weights; out, what the direction's first hit found.
+struct FirstHit {
+  const PatchGuide* patches = nullptr;  // null: the first hit's punctual light counts fully
+  float sphereWeight = 0.0f;            // directions a batch x the density this one was drawn with
+  float patchWeight = 0.0f;             // patch points a batch (x their density at the hit: the MIS partner)
+  bool bounces = false;                 // the path's first kLitPatchVertices hits draw a patch point each
+  // Out: the first surface hit (triangle, barycentrics) and its one-bounce light, albedo / pi x the punctual
+  // lights' irradiance, before the MIS weight (0 when nothing was hit or lit); `weight` is that weight.
+  bool hit = false;
+  uint32_t triangle = 0;
+  float u = 0.0f, v = 0.0f;
+  glm::vec3 radiance{0.0f};
+  float weight = 1.0f;
+};
+
 struct TraceSettings {
   int bounces = 2;       // diffuse reflections after the first hit
   uint32_t content = 0;  // ProbeContent flags
+  // Set for a probe's direction under lit-patch sampling: the first surface hit's punctual light is
+  // MIS-weighted against the patch points (power heuristic), and the hit is reported.
+  FirstHit* firstHit = nullptr;
 };
+
+// The one-bounce light a patch point sends to a probe (lit-patch sampling): albedo / pi x the punctual
+// lights' irradiance at barycentrics (u, v) of `triangle`, on the side facing the probe, times the
+// transmittance of the segment from the probe. `dir` and `dist` are from the probe to the point; 0 when the
+// point sits in an alpha-cutout hole or the segment is blocked.
+glm::vec3 patchPointRadiance(const SceneTracer& tracer, const glm::vec3& probe, uint32_t triangle, float u,
+                             float v, const glm::vec3& dir, float dist, Rng& rng);
 
 // Radiance in W/(m^2 sr) arriving at `origin` from unit direction `dir` (the ray starts at origin, tnear 0).
 // `prevPdf` > 0: `dir` was drawn with this solid-angle pdf (a cosine lobe, or a probe's uniform sphere) at a
@@ -63,6 +90,13 @@ glm::vec3 emissiveIrradiance(const SceneTracer& tracer, const glm::vec3& origin,
 // opaque surface blocks it). Exact (no randomness) for zero radii.
 glm::vec3 punctualIrradiance(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
                              const glm::vec3& n, Rng& rng);
+
+// An unbiased one-sample estimate of punctualIrradiance: one light drawn in proportion to a weight of its
+// unshadowed irradiance at x (its luminance x cosine x falloff x cone; a sun's cosine widened by its disc),
+// its term over the probability of drawing it. One shadow ray whatever the number of lights; exactly
+// punctualIrradiance's when the scene has one light.
+glm::vec3 punctualIrradianceOneLight(const SceneTracer& tracer, const glm::vec3& x, const glm::vec3& origin,
+                                     const glm::vec3& n, Rng& rng);
 
 // Spot cone attenuation for light `l` towards unit direction `toPoint` (from the light to the receiver).
 float spotFactor(const Light& l, const glm::vec3& toPoint);

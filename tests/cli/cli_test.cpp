@@ -328,6 +328,9 @@ TEST_F(Cli, MergeRefusesPartsThatDoNotBelongTogether) {
   std::string damaged = slurp(path("s1.part"));
   damaged[damaged.size() / 2] ^= 0x10;
   std::ofstream(path("damaged.part"), std::ios::binary) << damaged;
+  std::string older = slurp(path("s1.part"));  // a part of the format before the estimate's batch count
+  older[7] = '1';
+  std::ofstream(path("older.part"), std::ios::binary) << older;
   const std::string s0 = path("s0.part").string(), s1 = path("s1.part").string();
   const struct {
     std::string args, mentions;
@@ -337,6 +340,7 @@ TEST_F(Cli, MergeRefusesPartsThatDoNotBelongTogether) {
       {"merge " + s0 + " " + path("seed7.part").string(), "different options"},
       {"merge " + s0 + " " + path("damaged.part").string(), "checksum"},
       {"merge " + path("box.obj").string(), "not a shard part"},
+      {"merge " + s0 + " " + path("older.part").string(), "another version"},
       {base + " --shard 2/2 -o " + path("x.part").string(), "--shard"},
       {base + " --noise 0 --shard 0/2 -o " + path("x.part").string(), "adaptive"},
   };

@@ -86,6 +86,13 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "where its earlier paths found light (path guiding of the first direction; unbiased; "
        "docs/accuracy.md#probe-guiding)",
        def("--guide")},
+      {"--lit-patches", "", "probe|bounces|off",
+       "adaptive sampling, with --guide, for probes that would stop at --max-samples: their later batches "
+       "also "
+       "draw points on the surfaces their paths found lit by point, spot or sun lights, MIS-weighted against "
+       "their directions (unbiased); bounces: their paths' first three hits too (costlier; "
+       "docs/accuracy.md#lit-patch-sampling)",
+       def("--lit-patches")},
       {"--path-budget", "", "N",
        "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "
        "and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), so a small "
@@ -251,6 +258,12 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
   if (args.str("--guide") != "on" && args.str("--guide") != "off")
     throw UsageError("--guide must be on or off, not '" + args.str("--guide") + "'");
   opt.bake.guide = args.str("--guide") == "on";
+  const std::string lit = args.str("--lit-patches");
+  if (lit != "probe" && lit != "bounces" && lit != "off")
+    throw UsageError("--lit-patches must be probe, bounces or off, not '" + lit + "'");
+  opt.bake.litPatches = lit == "off"     ? LitPatches::kOff
+                        : lit == "probe" ? LitPatches::kProbe
+                                         : LitPatches::kBounces;
   const double pathBudget = args.number("--path-budget");
   if (!(pathBudget >= 0.0 && pathBudget <= 1e15))
     throw UsageError("--path-budget must be a number of paths in [0, 1e15]");
@@ -347,6 +360,9 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
   add("--noise", exactNumber(o.bake.targetRelError));
   add("--max-samples", std::to_string(o.bake.maxSamplesPerProbe));
   add("--guide", o.bake.guide ? "on" : "off");
+  add("--lit-patches", o.bake.litPatches == LitPatches::kOff     ? "off"
+                       : o.bake.litPatches == LitPatches::kProbe ? "probe"
+                                                                 : "bounces");
   add("--path-budget", std::to_string(o.bake.pathBudget));
   if (o.bake.content != kContentDefault && o.bake.content != kContentAll)
     throw std::logic_error("levelOptions: content flags " + std::to_string(o.bake.content) +

@@ -17,8 +17,8 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "part files are written on little-endian hosts");
 
-constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '1'};
-constexpr size_t kRecordBytes = 4 + 8 * 27 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8;
+constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '2'};
+constexpr size_t kRecordBytes = 4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8;
 
 uint64_t fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -154,6 +154,7 @@ void writeShardPart(const std::string& path, const ShardPart& part) {
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) w.put(s.acc[i][c]);
     w.put(s.batches);
+    w.put(s.estimated);
     for (double v : s.mean) w.put(v);
     for (double v : s.m2) w.put(v);
     w.put(s.achieved);
@@ -170,6 +171,9 @@ ShardPart readShardPart(const std::string& path) {
   std::string error;
   if (!readFile(path, bytes, &error)) throw InputError(error);
   Reader r(bytes, path);
+  if (bytes.size() >= 8 && std::memcmp(bytes.data(), kMagic, 7) == 0 && bytes[7] != kMagic[7])
+    r.fail("a shard part file of another version (" + std::string(bytes.data(), 8) +
+           "): bake its shards again with this tetraprobe");
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) r.fail("not a shard part file");
   if (bytes.size() < 16) r.fail("truncated");
   uint64_t stored;
@@ -203,6 +207,7 @@ ShardPart readShardPart(const std::string& path) {
     for (int i = 0; i < kShCoeffCount; ++i)
       for (int c = 0; c < 3; ++c) s.acc[i][c] = r.get<double>();
     s.batches = r.get<int32_t>();
+    s.estimated = r.get<int32_t>();
     for (double& v : s.mean) v = r.get<double>();
     for (double& v : s.m2) v = r.get<double>();
     s.achieved = r.get<double>();

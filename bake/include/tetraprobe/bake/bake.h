@@ -20,6 +20,9 @@ namespace tetraprobe {
 // closed box of albedo exactly 1; at albedo 0.99 a path reaches it with probability 0.99^(2^20) = 0.
 inline constexpr int kUnboundedBounces = 1 << 20;
 
+// Lit-patch sampling (BakeOptions::litPatches).
+enum class LitPatches { kOff, kProbe, kBounces };
+
 struct BakeOptions {
   int bounces = kUnboundedBounces;  // diffuse bounces after the first hit (0 = direct light only)
   int samplesPerProbe = 256;        // paths per probe (adaptive: the minimum, rounded up to batches)
@@ -43,6 +46,12 @@ struct BakeOptions {
   // half of each batch's directions from it (bake/src/probe_guide.h; unbiased: every direction weighted by
   // the mixture's density). false: every batch uniform.
   bool guide = true;
+  // Adaptive sampling, with guide, for a probe that would stop at the cap above the target: its later
+  // batches also learn in which voxels their first hit found surfaces lit by point, spot or sun lights, and
+  // add 32 points drawn on those surfaces (by a map of where the lights fall), their one-bounce light
+  // MIS-weighted against the sphere directions (bake/src/patch_guide.h; unbiased). kBounces: the first three
+  // hits of each of its paths draw such a point too (light one or two bounces further; two rays a hit).
+  LitPatches litPatches = LitPatches::kProbe;
   int threads = 0;                      // 0 = all cores; never changes the result
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
@@ -114,9 +123,11 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
 
 // One probe's adaptive accumulator after pass 2 (the sums bakeProbes keeps, in double).
 struct ProbeBakeState {
-  double acc[kShCoeffCount][3] = {};  // sum over batches of the batch SH (W/(m^2 sr))
+  double acc[kShCoeffCount][3] = {};  // sum over the estimated batches of the batch SH (W/(m^2 sr))
   int32_t batches = 0;                // batches of kBakeBatchSize paths taken
-  double mean[6] = {}, m2[6] = {};    // Welford over batches of the luminance of E at the six axis normals
+  int32_t estimated = 0;              // the last of them that acc, mean and m2 hold (all, or from the first
+                                      // guided one under lit-patch sampling)
+  double mean[6] = {}, m2[6] = {};    // Welford over those of the luminance of E at the six axis normals
   double achieved = -1.0;             // relative standard error reached against the floor
   uint64_t intersectRays = 0, occludedRays = 0;  // rays this probe's passes 1-2 traced (BakeStats)
 };
