@@ -106,7 +106,6 @@ LitMap::LitMap(const SceneTracer& tracer, double cellArea, double voxel, uint64_
       Voxel& v = voxels_[voxelOf(uint32_t(t), cell)];
       v.cells.push_back((uint64_t(t) << 32) | cell);
       v.cdf.push_back((v.cdf.empty() ? 0.0 : v.cdf.back()) + double(w));
-      ++litCells_;
     }
   }
 }

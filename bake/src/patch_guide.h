@@ -58,7 +58,6 @@ class LitMap {
   uint64_t voxelOf(uint32_t triangle, uint32_t cell) const;
   // The voxel of `key`, null when it holds no lit cell.
   const Voxel* voxel(uint64_t key) const;
-  size_t litCells() const { return litCells_; }
 
  private:
   const SceneTracer* tracer_ = nullptr;
@@ -67,7 +66,6 @@ class LitMap {
       offset_;  // per triangle (and one past the last): its first cell slot (2 k^2 a triangle)
   std::vector<float> weight_;
   std::unordered_map<uint64_t, Voxel> voxels_;
-  size_t litCells_ = 0;
 };
 
 // Light per voxel key, summed over samples (non-finite or non-positive values are ignored).
