@@ -100,6 +100,13 @@ float sphereDirectionPdf(const ProbeGuide* guide, const glm::vec3& d) {
   return guide ? 0.5f * kSpherePdf + 0.5f * guide->pdf(d) : kSpherePdf;
 }
 
+// acc += l x weight x Y(d): one sample's term of the SH projection's sum, in double.
+void addProjected(double acc[kShCoeffCount][3], const glm::vec3& l, double weight, const glm::vec3& d) {
+  const auto y = shBasis<double>(d.x, d.y, d.z);
+  for (int i = 0; i < kShCoeffCount; ++i)
+    for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * weight * y[size_t(i)];
+}
+
 bool samplesEmitters(const SceneTracer& tracer, const BakeOptions& options) {
   return (options.content & kContentEmissive) && !tracer.impl().emissive.empty();
 }
@@ -118,9 +125,7 @@ void addEmitterSamples(const SceneTracer& tracer, const glm::vec3& probe, size_t
     if (through <= 0.0f) continue;
     const double weight = double(through) * powerHeuristic(e.pdf, sphereDirectionPdf(guide, e.dir)) /
                           (double(e.pdf) * 4.0 * std::numbers::pi);
-    const auto y = shBasis<double>(e.dir.x, e.dir.y, e.dir.z);
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) acc[i][c] += double(e.radiance[c]) * weight * y[size_t(i)];
+    addProjected(acc, e.radiance, weight, e.dir);
   }
 }
 
@@ -182,11 +187,6 @@ constexpr uint64_t kPatchSampleTag = 1ull << 59;
 // Lit-patch points a batch draws, against its kBakeBatchSize sphere directions.
 constexpr int kPatchSamples = 32;
 
-// The voxel a point's lit-map cell belongs to (patch_guide.h).
-uint64_t litVoxel(const LitMap& map, uint32_t triangle, float u, float v) {
-  return map.voxelOf(triangle, cellOf(u, v, map.cellsPerEdge(triangle)));
-}
-
 // The voxel edge of lit-patch sampling's map for a bake of `probes`: cbrt(box volume / probes), the box of
 // the traced probes with each axis floored at 1e-3 of the largest (about the probe spacing); its cells are
 // a quarter of that on an edge; 1 for a degenerate set.
@@ -227,6 +227,40 @@ void restartEstimate(AdaptiveProbe& st) {
     for (double& v : row) v = 0.0;
   for (int k = 0; k < 6; ++k) st.mean[k] = st.m2[k] = 0.0;
   st.estimated = 0;
+}
+
+// Batch b's kPatchSamples lit-patch points for probe `index` (random streams keyed by (seed, probe,
+// kPatchSampleTag | b x kPatchSamples + k)), each MIS-weighted against the batch's sphere directions (density
+// `guide`'s mixture) and added to acc in the units of the sphere sum (L Y / (4 pi p) a direction;
+// kBakeBatchSize / kPatchSamples of that a point); each lit point also goes into the probe's voxel histogram.
+void addPatchPoints(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
+                    const BakeOptions& options, uint64_t b, const PatchGuide& patchGuide,
+                    const LitMap& litMap, const ProbeGuide* guide, PatchHistogram& learned,
+                    double acc[kShCoeffCount][3]) {
+  for (int k = 0; k < kPatchSamples; ++k) {
+    Rng rng(streamKey(options.seed, index, kPatchSampleTag | (b * kPatchSamples + uint64_t(k))));
+    const double u1 = (double(k) + rng.uniformDouble()) / double(kPatchSamples);
+    const double u2 = rng.uniformDouble();
+    const float u3 = rng.uniform(), u4 = rng.uniform();
+    const PatchPoint pt = patchGuide.sample(u1, u2, u3, u4);
+    const glm::vec3 to = tracer.impl().pointOn(pt.triangle, pt.u, pt.v) - probe;
+    const float dist = glm::length(to);
+    if (!(dist > 0.0f) || !(pt.pdfArea > 0.0f)) continue;
+    const glm::vec3 d = to / dist;
+    const float cosY = std::abs(glm::dot(tracer.impl().normals[pt.triangle], d));
+    if (!(cosY > 0.0f)) continue;
+    const glm::vec3 l = patchPointRadiance(tracer, probe, pt.triangle, pt.u, pt.v, d, dist, rng);
+    if (!(maxComponent(l) > 0.0f)) continue;
+    const float pdf = solidAnglePdf(pt.pdfArea, dist, cosY);
+    const float weight =
+        powerHeuristic(float(kPatchSamples) * pdf, float(kBakeBatchSize) * sphereDirectionPdf(guide, d));
+    addProjected(acc, l,
+                 double(weight) * double(kBakeBatchSize) /
+                     (double(kPatchSamples) * double(pdf) * 4.0 * std::numbers::pi),
+                 d);
+    learned.add(litMap.voxelAt(pt.triangle, pt.u, pt.v),
+                double(luminance(l)) * weight / (double(kPatchSamples) * double(pdf)));
+  }
 }
 
 void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, const BakeOptions& options,
@@ -282,44 +316,17 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
       traced.firstHit = &first;
     }
     const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? pdf : 0.0f, traced, rng);
-    const auto y = shBasis<double>(d.x, d.y, d.z);
     const double w = guide ? double(kSpherePdf) / double(pdf) : 1.0;  // in units of a uniform sample
     if (learn) slot->histogram.add(d, luminance(glm::dvec3(l)) * w);
-    if (patches && litMap && first.hit && maxComponent(first.radiance) > 0.0f)
-      slot->patches.add(litVoxel(*litMap, first.triangle, first.u, first.v),
+    if (patches && first.hit && maxComponent(first.radiance) > 0.0f)
+      slot->patches.add(litMap->voxelAt(first.triangle, first.u, first.v),
                         double(luminance(first.radiance)) * first.weight / (double(kBakeBatchSize) * pdf));
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * w * y[size_t(i)];
+    addProjected(acc, l, w, d);
   }
   if (emitters)
     addEmitterSamples(tracer, probe, index, options, b * kBakeBatchSize, kBakeBatchSize, acc, guide);
-  // Lit-patch points: each MIS-weighted against the sphere directions' density there, in the units of the
-  // sphere sum (L Y / (4 pi p) a direction; n_sphere / n_patch of that a point).
-  for (int k = 0; patchGuide && litMap && slot && k < kPatchSamples; ++k) {
-    Rng rng(streamKey(options.seed, index, kPatchSampleTag | (b * kPatchSamples + uint64_t(k))));
-    const double u1 = (double(k) + rng.uniformDouble()) / double(kPatchSamples);
-    const double u2 = rng.uniformDouble();
-    const float u3 = rng.uniform(), u4 = rng.uniform();
-    const PatchPoint pt = patchGuide->sample(u1, u2, u3, u4);
-    const glm::vec3 to = tracer.impl().pointOn(pt.triangle, pt.u, pt.v) - probe;
-    const float dist = glm::length(to);
-    if (!(dist > 0.0f) || !(pt.pdfArea > 0.0f)) continue;
-    const glm::vec3 d = to / dist;
-    const float cosY = std::abs(glm::dot(tracer.impl().normals[pt.triangle], d));
-    if (!(cosY > 0.0f)) continue;
-    const glm::vec3 l = patchPointRadiance(tracer, probe, pt.triangle, pt.u, pt.v, d, dist, rng);
-    if (!(maxComponent(l) > 0.0f)) continue;
-    const float pdf = pt.pdfArea * dist * dist / cosY;
-    const float weight =
-        powerHeuristic(float(kPatchSamples) * pdf, float(kBakeBatchSize) * sphereDirectionPdf(guide, d));
-    const double scale = double(weight) * double(kBakeBatchSize) /
-                         (double(kPatchSamples) * double(pdf) * 4.0 * std::numbers::pi);
-    const auto y = shBasis<double>(d.x, d.y, d.z);
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * scale * y[size_t(i)];
-    slot->patches.add(litVoxel(*litMap, pt.triangle, pt.u, pt.v),
-                      double(luminance(l)) * weight / (double(kPatchSamples) * double(pdf)));
-  }
+  if (patchGuide)
+    addPatchPoints(tracer, probe, index, options, b, *patchGuide, *litMap, guide, slot->patches, acc);
   const double scale = 4.0 * std::numbers::pi / kBakeBatchSize;
   for (int i = 0; i < kShCoeffCount; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -379,9 +386,7 @@ ShRgb bake_detail::bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, 
     const glm::vec3 d = glm::vec3(glm::normalize(rotation * fibonacci[size_t(k)]));
     Rng rng(streamKey(options.seed, index, uint64_t(k) + 1));
     const glm::vec3 l = incidentRadiance(tracer, probe, d, emitters ? kSpherePdf : 0.0f, settings, rng);
-    const auto y = shBasis<double>(d.x, d.y, d.z);
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) acc[i][c] += double(l[c]) * y[i];
+    addProjected(acc, l, 1.0, d);
   }
   if (emitters) addEmitterSamples(tracer, probe, index, options, 0, n, acc);
   ShRgb sh;

@@ -27,11 +27,22 @@ uint32_t cellOf(float u, float v, int k) {
   return uint32_t(2 * (i * k + j) + (inverted ? 1 : 0));
 }
 
+namespace {
+
+// Barycentrics of the point at coordinates (s, t) of cell `cell`'s own unit triangle (k to an edge): an
+// upright cell's corners are (i, j), (i + 1, j), (i, j + 1) over k, an inverted one's (i + 1, j + 1),
+// (i, j + 1), (i + 1, j).
+glm::vec2 cellToTriangle(uint32_t cell, int k, float s, float t) {
+  const int c = int(cell / 2), i = c / k, j = c % k;
+  if (cell & 1u) return glm::vec2((float(i + 1) - s) / float(k), (float(j + 1) - t) / float(k));
+  return glm::vec2((float(i) + s) / float(k), (float(j) + t) / float(k));
+}
+
+}  // namespace
+
 glm::vec2 cellPoint(uint32_t cell, int k, float u1, float u2) {
   const glm::vec2 b = uniformTriangle(u1, u2);
-  const int c = int(cell / 2), i = c / k, j = c % k;
-  if (cell & 1u) return glm::vec2((float(i + 1) - b.x) / float(k), (float(j + 1) - b.y) / float(k));
-  return glm::vec2((float(i) + b.x) / float(k), (float(j) + b.y) / float(k));
+  return cellToTriangle(cell, k, b.x, b.y);
 }
 
 namespace {
@@ -46,10 +57,8 @@ bool cellExists(uint32_t cell, int k) {
 
 // Barycentrics of a cell's centroid.
 glm::vec2 cellCentre(uint32_t cell, int k) {
-  const int c = int(cell / 2), i = c / k, j = c % k;
   const float third = 1.0f / 3.0f;
-  if (cell & 1u) return glm::vec2((float(i + 1) - third) / float(k), (float(j + 1) - third) / float(k));
-  return glm::vec2((float(i) + third) / float(k), (float(j) + third) / float(k));
+  return cellToTriangle(cell, k, third, third);
 }
 
 }  // namespace
@@ -71,7 +80,7 @@ LitMap::LitMap(const SceneTracer& tracer, double cellArea, double voxel, uint64_
     DenormalScope denormals;
     const uint32_t tri = uint32_t(t);
     const Material& m = impl.material(tri);
-    const float reflect = 1.0f - std::min(m.transmission, 1.0f);
+    const float reflect = reflectedShare(m);
     if (maxComponent(m.albedo) <= 0.0f || !(reflect > 0.0f) || !(impl.areas[t] > 0.0f)) return;
     const int k = cellsPerEdge(tri);
     const float cellArea = impl.areas[t] / float(k * k);
@@ -120,6 +129,10 @@ uint64_t LitMap::voxelOf(uint32_t triangle, uint32_t cell) const {
   // 21 bits a coordinate (two's complement, wrapped): voxels 2^21 apart share a key, far beyond any level.
   auto q = [this](float x) { return uint64_t(int64_t(std::floor(double(x) * inverseVoxel_))) & 0x1fffffull; };
   return q(p.x) | (q(p.y) << 21) | (q(p.z) << 42);
+}
+
+uint64_t LitMap::voxelAt(uint32_t triangle, float u, float v) const {
+  return voxelOf(triangle, cellOf(u, v, cellsPerEdge(triangle)));
 }
 
 const LitMap::Voxel* LitMap::voxel(uint64_t key) const {

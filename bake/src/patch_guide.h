@@ -56,6 +56,8 @@ class LitMap {
   // The lit cell of barycentrics (u, v) of `triangle`: its weight (0 when unlit) and voxel key.
   float weight(uint32_t triangle, uint32_t cell) const { return weight_[offset_[triangle] + cell]; }
   uint64_t voxelOf(uint32_t triangle, uint32_t cell) const;
+  // The voxel of the cell holding barycentrics (u, v) of `triangle`.
+  uint64_t voxelAt(uint32_t triangle, float u, float v) const;
   // The voxel of `key`, null when it holds no lit cell.
   const Voxel* voxel(uint64_t key) const;
 

@@ -162,8 +162,7 @@ glm::vec3 patchPointRadiance(const SceneTracer& tracer, const glm::vec3& probe, 
   const SceneTracer::Impl& impl = tracer.impl();
   if (tracer.isHole(triangle, u, v)) return glm::vec3(0.0f);
   const Material& m = impl.material(triangle);
-  // A transmissive surface reflects only when a path does not pass it (probability 1 - transmission).
-  const float reflect = 1.0f - std::min(m.transmission, 1.0f);
+  const float reflect = reflectedShare(m);
   if (maxComponent(m.albedo) <= 0.0f || !(reflect > 0.0f)) return glm::vec3(0.0f);
   const glm::vec3 nt = impl.normals[triangle];
   const float side = glm::dot(nt, dir);
@@ -222,7 +221,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
       float weight = 1.0f;
       if (prevPdf > 0.0f) {
         const float cosLight = -glm::dot(hit.geometricNormal, d);
-        const float pdfLight = impl.emissivePdfArea[hit.triangle] * hit.t * hit.t / cosLight;
+        const float pdfLight = solidAnglePdf(impl.emissivePdfArea[hit.triangle], hit.t, cosLight);
         weight = powerHeuristic(prevPdf, pdfLight);
       }
       radiance += throughput * m.emission * weight;
@@ -260,7 +259,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
         const float pdfArea = f.patches->pdfArea(hit.triangle, hit.u, hit.v);
         const float cosY = std::abs(glm::dot(hit.geometricNormal, d));
         if (pdfArea > 0.0f && cosY > 0.0f)
-          f.weight = powerHeuristic(f.sphereWeight, f.patchWeight * pdfArea * hit.t * hit.t / cosY);
+          f.weight = powerHeuristic(f.sphereWeight, solidAnglePdf(f.patchWeight * pdfArea, hit.t, cosY));
       }
       punctual *= f.weight;
     } else if (bouncePatches) {
@@ -269,7 +268,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
       const float pdfArea = bouncePatches->pdfArea(hit.triangle, hit.u, hit.v);
       const float cosY = std::abs(glm::dot(hit.geometricNormal, d));
       if (pdfArea > 0.0f && cosY > 0.0f && maxComponent(punctual) > 0.0f)
-        punctual *= powerHeuristic(prevPdf, pdfArea * hit.t * hit.t / cosY);
+        punctual *= powerHeuristic(prevPdf, solidAnglePdf(pdfArea, hit.t, cosY));
     }
     const glm::vec3 irradiance = emissiveIrradiance(tracer, p, n, rng) + punctual;
     radiance += throughput * m.albedo * kInvPi * irradiance;
@@ -290,7 +289,7 @@ glm::vec3 incidentRadiance(const SceneTracer& tracer, const glm::vec3& origin, c
         const float cosX = glm::dot(n, w), cosZ = std::abs(glm::dot(impl.normals[pt.triangle], w));
         if (cosX > 0.0f && cosZ > 0.0f) {
           const glm::vec3 l = patchPointRadiance(tracer, p, pt.triangle, pt.u, pt.v, w, dist, rng);
-          const float pdf = pt.pdfArea * dist * dist / cosZ;
+          const float pdf = solidAnglePdf(pt.pdfArea, dist, cosZ);
           if (maxComponent(l) > 0.0f)
             radiance +=
                 throughput * m.albedo * l * (kInvPi * cosX * powerHeuristic(pdf, cosX * kInvPi) / pdf);

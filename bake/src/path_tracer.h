@@ -8,6 +8,7 @@
 // kContentDirectPunctual and is added by the callers (analytically for probes, by NEE at reference points).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include <glm/vec3.hpp>
@@ -41,6 +42,12 @@ struct TraceSettings {
   // MIS-weighted against the patch points (power heuristic), and the hit is reported.
   FirstHit* firstHit = nullptr;
 };
+
+// The share of the light meeting a surface that a path reflects there (scene.h's thin-glass model: it passes a
+// transmissive surface with probability `transmission`, else reflects): 1 - transmission, 0 from 1 on.
+inline float reflectedShare(const Material& m) {
+  return 1.0f - std::min(m.transmission, 1.0f);
+}
 
 // The one-bounce light a patch point sends to a probe (lit-patch sampling): albedo / pi x the punctual
 // lights' irradiance at barycentrics (u, v) of `triangle`, on the side facing the probe, times the

@@ -27,6 +27,12 @@ inline float maxComponent(const glm::vec3& c) {
   return std::fmax(c.x, std::fmax(c.y, c.z));
 }
 
+// The solid-angle density, seen from a point `dist` away, of a point drawn on a surface with area density
+// pdfArea, whose normal makes cosine cosAtPoint with the line between them: pdfArea dist^2 / cosAtPoint.
+inline float solidAnglePdf(float pdfArea, float dist, float cosAtPoint) {
+  return pdfArea * dist * dist / cosAtPoint;
+}
+
 // Power heuristic with beta = 2 for one sample from each of two strategies.
 inline float powerHeuristic(float pdfA, float pdfB) {
   const float a = pdfA * pdfA, b = pdfB * pdfB;

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <numbers>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -490,6 +491,40 @@ std::vector<glm::dvec3> spotlitProbes() {
   return probes;
 }
 
+// Luminance of the irradiance at the six axis normals of a probe's SH.
+std::array<double, 6> axisLuminance(const ShRgb& sh) {
+  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::array<double, 6> out{};
+  for (int k = 0; k < 6; ++k) out[size_t(k)] = luminance(glm::dvec3(shIrradiance(sh, axes[k])));
+  return out;
+}
+
+// Two unbiased bakes of the same probes: every probe's luminance at the six axis normals agrees within `sigmas`
+// combined standard errors (each bake's achieved relative stderr for the probe, times the first bake's mean
+// over the normals, bounds its error at each normal). Returns the sums over probes and normals and a bound on
+// the variance of their difference (the normals' errors may be correlated: 6 x the sum of each one's).
+struct BakeSums {
+  double a = 0.0, b = 0.0, variance = 0.0;
+};
+BakeSums expectBakesAgree(const std::vector<ShRgb>& a, const BakeStats& aStats, const std::vector<ShRgb>& b,
+                          const BakeStats& bStats, double sigmas) {
+  BakeSums sums;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::array<double, 6> ea = axisLuminance(a[i]), eb = axisLuminance(b[i]);
+    double mean = 0.0;
+    for (double e : ea) mean += e / 6.0;
+    const double sa = aStats.probeRelError[i] * mean, sb = bStats.probeRelError[i] * mean;
+    for (size_t k = 0; k < 6; ++k) {
+      EXPECT_LE(std::abs(ea[k] - eb[k]), sigmas * std::sqrt(sa * sa + sb * sb))
+          << "probe " << i << " normal " << k << ": " << ea[k] << " vs " << eb[k];
+      sums.a += ea[k];
+      sums.b += eb[k];
+    }
+    sums.variance += 6.0 * 6.0 * (sa * sa + sb * sb);
+  }
+  return sums;
+}
+
 // Guiding draws directions from a histogram, but every direction is weighted by the mixture's density, so
 // the estimate's expectation is the unguided one's: on the spotlit room, with both at 8,192 paths a probe,
 // the irradiance at the six axis normals of every probe agrees within 4 combined standard errors (each
@@ -511,18 +546,7 @@ TEST(ProbeGuiding, UnbiasedLessNoisyAndDeterministic) {
   const std::vector<ShRgb> a = bakeProbes(tracer, probes, off, &offStats);
   const std::vector<ShRgb> b = bakeProbes(tracer, probes, on, &onStats);
   ASSERT_EQ(offStats.paths, onStats.paths);
-  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (size_t i = 0; i < probes.size(); ++i) {
-    double mean = 0.0;
-    for (const glm::vec3& n : axes) mean += luminance(glm::dvec3(shIrradiance(a[i], n))) / 6.0;
-    const double sa = offStats.probeRelError[i] * mean, sb = onStats.probeRelError[i] * mean;
-    for (const glm::vec3& n : axes) {
-      const double ea = luminance(glm::dvec3(shIrradiance(a[i], n)));
-      const double eb = luminance(glm::dvec3(shIrradiance(b[i], n)));
-      EXPECT_LE(std::abs(ea - eb), 4.0 * std::sqrt(sa * sa + sb * sb))
-          << "probe " << i << " normal (" << n.x << ", " << n.y << ", " << n.z << "): " << ea << " vs " << eb;
-    }
-  }
+  expectBakesAgree(a, offStats, b, onStats, 4.0);
   std::printf(
       "probe guiding, spotlit room, %llu paths a bake: mean relative stderr %.4f uniform, %.4f guided\n",
       static_cast<unsigned long long>(onStats.paths), offStats.meanRelError, onStats.meanRelError);
@@ -575,14 +599,6 @@ std::vector<glm::dvec3> roofLitProbes() {
   return probes;
 }
 
-// Luminance of the irradiance at the six axis normals of a probe's SH.
-std::array<double, 6> axisLuminance(const ShRgb& sh) {
-  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  std::array<double, 6> out{};
-  for (int k = 0; k < 6; ++k) out[size_t(k)] = luminance(glm::dvec3(shIrradiance(sh, axes[k])));
-  return out;
-}
-
 // Lit-patch sampling draws points on the surfaces a probe's paths found lit and weighs them and the sphere
 // directions (and, with kBounces, each of the first hits' points and the cosine direction that follows) by
 // the power heuristic, so its expectation is the sphere's alone: at 65,536 paths a probe (1 M paths a bake),
@@ -606,23 +622,9 @@ TEST(LitPatches, AgreeWithSphereSamplingAtAMillionPaths) {
     BakeStats onStats;
     const std::vector<ShRgb> b = bakeProbes(tracer, probes, on, &onStats);
     ASSERT_EQ(offStats.paths, onStats.paths);
-    double sumA = 0.0, sumB = 0.0, varA = 0.0, varB = 0.0;
-    for (size_t i = 0; i < probes.size(); ++i) {
-      const std::array<double, 6> ea = axisLuminance(a[i]), eb = axisLuminance(b[i]);
-      double mean = 0.0;
-      for (double e : ea) mean += e / 6.0;
-      // A probe's relative stderr bounds the stderr at each normal against the mean over normals.
-      const double sa = offStats.probeRelError[i] * mean, sb = onStats.probeRelError[i] * mean;
-      for (size_t k = 0; k < 6; ++k) {
-        EXPECT_LE(std::abs(ea[k] - eb[k]), 4.0 * std::sqrt(sa * sa + sb * sb))
-            << "mode " << int(mode) << " probe " << i << " normal " << k << ": " << ea[k] << " vs " << eb[k];
-        sumA += ea[k];
-        sumB += eb[k];
-      }
-      varA += 6.0 * sa * sa;  // at most: the normals' errors are correlated
-      varB += 6.0 * sb * sb;
-    }
-    EXPECT_LE(std::abs(sumA - sumB), 3.0 * std::sqrt(6.0 * (varA + varB))) << sumA << " vs " << sumB;
+    SCOPED_TRACE("mode " + std::to_string(int(mode)));
+    const BakeSums sums = expectBakesAgree(a, offStats, b, onStats, 4.0);
+    EXPECT_LE(std::abs(sums.a - sums.b), 3.0 * std::sqrt(sums.variance)) << sums.a << " vs " << sums.b;
     std::printf(
         "lit patches (mode %d), roof-lit room, %llu paths a bake: mean relative stderr %.4f without, "
         "%.4f with\n",

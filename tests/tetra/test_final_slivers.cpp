@@ -58,6 +58,15 @@ double earlyWorst(const LateCase& l) {
   return worstOf(std::vector<glm::dvec3>(l.points.begin(), l.points.begin() + std::ptrdiff_t(l.firstLate)));
 }
 
+// The pass's options for the case: its late probes, bounded by the worst before them (removal only: no
+// fillers, no moves).
+FinalSliverOptions lateOptions(const LateCase& l) {
+  FinalSliverOptions o;
+  o.targetDeg = earlyWorst(l);
+  o.firstLate = l.firstLate;
+  return o;
+}
+
 // An inside test that vetoes every candidate.
 std::vector<uint8_t> allInside(const std::vector<glm::dvec3>& pts) {
   return std::vector<uint8_t>(pts.size(), 1);
@@ -110,9 +119,7 @@ TEST(LateSlivers, FinalWorstDihedralIsNoWorseThanBeforeLateProbes) {
 // without, and the inside test still vetoes them (everything inside: the removal-only answer).
 TEST(LateSlivers, FillersSpareLateProbesAndObeyTheInsideTest) {
   const LateCase l = latticeWithLateProbes(0.2);
-  FinalSliverOptions o;
-  o.targetDeg = earlyWorst(l);
-  o.firstLate = l.firstLate;
+  FinalSliverOptions o = lateOptions(l);
   const FinalSliverResult none = fixFinalSlivers(l.points, l.spacing, o, nullptr);
   o.maxFillers = 200;
   const FinalSliverResult some = fixFinalSlivers(l.points, l.spacing, o, nullptr);
@@ -128,9 +135,7 @@ TEST(LateSlivers, FillersSpareLateProbesAndObeyTheInsideTest) {
 // exactly what the removal alone drops.
 TEST(LateSlivers, MovesSpareLateProbesAndStillReachTheBound) {
   const LateCase l = latticeWithLateProbes(0.2);
-  FinalSliverOptions o;
-  o.targetDeg = earlyWorst(l);
-  o.firstLate = l.firstLate;
+  FinalSliverOptions o = lateOptions(l);
   const FinalSliverResult none = fixFinalSlivers(l.points, l.spacing, o, nullptr);
   o.nudgeRounds = 4;
   const FinalSliverResult moved = fixFinalSlivers(l.points, l.spacing, o, nullptr);
