@@ -31,6 +31,12 @@
 #include "tet_codec.h"
 
 namespace tetraprobe {
+
+const char* levelProbeKindName(LevelProbeKind kind) {
+  static const char* const kNames[kLevelProbeKindCount] = {
+      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
+  return uint8_t(kind) < kLevelProbeKindCount ? kNames[uint8_t(kind)] : "unknown";
+}
 namespace {
 
 // The header, the table and their checks: level_file.h (one parser for every reader).

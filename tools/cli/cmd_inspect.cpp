@@ -60,8 +60,6 @@ int cmdInspect(int argc, char** argv) {
     file["sections"][s.tag] = {{"bytes", s.bytes}, {"per_probe", double(s.bytes) / probes}};
 
   // Probes by kind (Level::probeKinds), when the level records them.
-  constexpr const char* kKindNames[kLevelProbeKindCount] = {
-      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
   nlohmann::json kinds = nlohmann::json::object();
   std::string kindText;
   if (!level.probeKinds.empty()) {
@@ -69,8 +67,9 @@ int cmdInspect(int argc, char** argv) {
     for (LevelProbeKind k : level.probeKinds) ++counts[uint8_t(k)];
     for (uint32_t k = 0; k < kLevelProbeKindCount; ++k) {
       if (counts[k] == 0) continue;
-      kinds[kKindNames[k]] = counts[k];
-      kindText += (kindText.empty() ? "" : ", ") + std::to_string(counts[k]) + " " + kKindNames[k];
+      const char* name = levelProbeKindName(LevelProbeKind(k));
+      kinds[name] = counts[k];
+      kindText += (kindText.empty() ? "" : ", ") + std::to_string(counts[k]) + " " + name;
     }
   }
 

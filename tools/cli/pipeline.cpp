@@ -108,8 +108,6 @@ void tetsBelowDeg(const std::vector<glm::dvec3>& points, const TetMesh& mesh, st
 // probes' kinds, e.g. "0.000 deg, hull, 1.2e-17 m^3, shell shell shell surface".
 std::string describeWorstTet(const std::vector<glm::dvec3>& points, const TetMesh& mesh,
                              const std::vector<LevelProbeKind>& kinds) {
-  static const char* const kNames[kLevelProbeKindCount] = {
-      "user", "surface", "volume", "open", "filler", "shell", "dilated", "hole", "refinement", "grid"};
   size_t worst = mesh.tets.size();
   double angle = 180.0;
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
@@ -136,7 +134,7 @@ std::string describeWorstTet(const std::vector<glm::dvec3>& points, const TetMes
   for (int k = 0; k < 4; ++k) {
     const size_t i = size_t(v[size_t(k)]);
     out << ' '
-        << (i < kinds.size() && uint8_t(kinds[i]) < kLevelProbeKindCount ? kNames[uint8_t(kinds[i])] : "?");
+        << (i < kinds.size() && uint8_t(kinds[i]) < kLevelProbeKindCount ? levelProbeKindName(kinds[i]) : "?");
   }
   return out.str();
 }

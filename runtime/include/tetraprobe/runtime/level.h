@@ -90,6 +90,8 @@ enum class LevelProbeKind : uint8_t {
   kGrid = 9,        // regular grid placement (--placement grid)
 };
 constexpr uint32_t kLevelProbeKindCount = 10;
+// The kind's name in reports ("user", "surface", ..., "grid"); "unknown" past the last kind.
+const char* levelProbeKindName(LevelProbeKind kind);
 
 struct Level {
   uint32_t content = kContentDefault;  // ProbeContent flags
