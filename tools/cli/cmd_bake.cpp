@@ -1,4 +1,5 @@
 // `tetraprobe bake SCENE -o LEVEL.tpb`: the per-level build.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,33 @@
 #include "tetraprobe/scene/load.h"
 
 namespace tetraprobe::cli {
+
+namespace {
+
+// The bake's noise by the kind of probe (Level::probeKinds): per kind with traced probes, their count and the
+// mean and 95th percentile of their relative stderr (BakeStats::probeRelError, -1 where not traced), so a
+// report shows whether the probes added late (hole, refinement) are as converged as the first.
+nlohmann::json noiseByKind(const Level& level, const std::vector<float>& noise) {
+  nlohmann::json out = nlohmann::json::object();
+  if (noise.size() != level.probeKinds.size()) return out;
+  std::vector<std::vector<double>> byKind(kLevelProbeKindCount);
+  for (size_t i = 0; i < noise.size(); ++i)
+    if (noise[i] >= 0.0f && uint8_t(level.probeKinds[i]) < kLevelProbeKindCount)
+      byKind[uint8_t(level.probeKinds[i])].push_back(std::isfinite(noise[i]) ? double(noise[i]) : 0.0);
+  for (uint32_t k = 0; k < kLevelProbeKindCount; ++k) {
+    std::vector<double>& e = byKind[k];
+    if (e.empty()) continue;
+    std::sort(e.begin(), e.end());
+    double sum = 0.0;
+    for (double v : e) sum += v;
+    const size_t p95 = std::min(e.size() - 1, size_t(std::ceil(0.95 * double(e.size()))) - 1);
+    out[levelProbeKindName(LevelProbeKind(k))] = {
+        {"probes", e.size()}, {"mean_rel_stderr", sum / double(e.size())}, {"p95_rel_stderr", e[p95]}};
+  }
+  return out;
+}
+
+}  // namespace
 
 int runBake(int argc, char** argv, const MergedShards* merge) {
   Args args("tetraprobe bake SCENE -o LEVEL.tpb [options]",
@@ -394,7 +422,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                    {"max_rel_stderr", stats.bake.maxRelError},
                    {"probes_above_target", stats.bake.probesAtCap},
                    {"path_budget", opt.bake.pathBudget},
-                   {"budget_paths", stats.bake.budgetPaths}}},
+                   {"budget_paths", stats.bake.budgetPaths},
+                   {"by_kind", noiseByKind(level, stats.bake.probeRelError)}}},
                  {"imported", stats.importedProbes > 0}};
     j["occlusion"] = {{"mode", occlusionModeName(opt.occlusion.mode)},
                       {"none", level.occlusion.empty() ? level.tets.size() : stats.occlusion.none},

@@ -94,9 +94,10 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "docs/accuracy.md#lit-patch-sampling)",
        def("--lit-patches")},
       {"--path-budget", "", "N",
-       "adaptive sampling: paths the bake may spend in all; when probes stop at --max-samples above --noise "
-       "and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), so a small "
-       "level converges; 0 = none",
+       "adaptive sampling: paths the bake may spend in all (the probes the hole and refinement rounds add "
+       "trace their first paths besides); once every probe is placed, when probes stop at --max-samples "
+       "above --noise and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), "
+       "so a small level converges; 0 = none",
        def("--path-budget")},
       {"--content", "", "default|all",
        "default: everything but light arriving directly from point/spot/sun lights (drawn in real "
