@@ -618,7 +618,7 @@ TEST_F(Cli, BakeIsBitIdenticalAcrossThreadCountsAndReports) {
 // The path budget's pass runs once every probe is placed, so the hole and refinement probes share the budget
 // with the probes placed first instead of stopping at the per-probe cap (when the first probes spent it all,
 // the refinement probes here averaged 3.6x the surface probes' relative stderr, 0.220 against 0.061); the
-// bake's noise figures cover every traced probe, by kind too.
+// bake's noise figures cover every traced probe, by kind too (report and summary).
 TEST_F(Cli, AddedProbesShareThePathBudgetWithTheFirst) {
   const CliRun r = run("bake " + sample() +
                        " --spacing 1 --samples 32 --max-samples 256 --path-budget 400000 --fill-holes 1"
@@ -642,6 +642,13 @@ TEST_F(Cli, AddedProbesShareThePathBudgetWithTheFirst) {
   const double refinement = kinds.at("refinement").at("mean_rel_stderr").get<double>();
   EXPECT_LT(refinement, 2.0 * surface) << kinds.dump();
   EXPECT_LE(j.at("bake").at("paths").get<int64_t>(), 400000 + 256 * traced);
+  // The summary says the same by kind.
+  char line[128];
+  std::snprintf(line, sizeof line, "refinement %.4f / %.4f (%lld)", refinement,
+                kinds.at("refinement").at("p95_rel_stderr").get<double>(),
+                (long long)kinds.at("refinement").at("probes").get<int64_t>());
+  EXPECT_NE(r.out.find("by kind, mean / p95 (probes): "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
 }
 
 // Refinement's surface points grow with its probe budget and with the level's surface (--refine-points auto,

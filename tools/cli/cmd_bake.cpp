@@ -262,6 +262,19 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
           "above target at the cap; %llu paths from the path budget\n",
           opt.bake.targetRelError, stats.bake.meanRelError, stats.bake.p95RelError, stats.bake.maxRelError,
           stats.bake.probesAtCap, (unsigned long long)stats.bake.budgetPaths);
+    // By kind, when more than one kind was traced: whether the probes added late converged as the first.
+    const nlohmann::json byKind = noiseByKind(level, stats.bake.probeRelError);
+    if (opt.bake.targetRelError > 0.0 && byKind.size() > 1) {
+      std::string text;
+      for (const auto& [name, k] : byKind.items()) {
+        char item[96];
+        std::snprintf(item, sizeof item, "%s%s %.4f / %.4f (%lld)", text.empty() ? "" : ", ", name.c_str(),
+                      k.at("mean_rel_stderr").get<double>(), k.at("p95_rel_stderr").get<double>(),
+                      (long long)k.at("probes").get<int64_t>());
+        text += item;
+      }
+      std::printf("          by kind, mean / p95 (probes): %s\n", text.c_str());
+    }
   }
   std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
               opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
