@@ -25,6 +25,7 @@
 #include "rng.h"
 #include "sampling.h"
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/bake/budget_shares.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
 #include "tetraprobe/common/progress.h"
@@ -658,7 +659,8 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         return {};
       }
     }
-    // Pass 3 (BakeOptions::pathBudget): the unspent budget shared evenly among the probes above the target.
+    // Pass 3 (BakeOptions::pathBudget): the unspent budget shared among the probes above the target
+    // (budgetStops), in rounds, each round sharing what the last left.
     auto batchesUsed = [&] {
       uint64_t n = 0;
       for (size_t i = 0; i < probes.size(); ++i) n += skipped(i) ? 0 : uint64_t(state[i].batches);
@@ -674,8 +676,12 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         if (!skipped(i) && achieved[i] > options.targetRelError && state[i].batches < ceilingBatches)
           open.push_back(i);
       if (open.empty()) break;
-      const uint64_t share = (budgetBatches - used) / open.size();
-      if (share == 0) break;
+      std::vector<BudgetProbe> asked(open.size());
+      for (size_t k = 0; k < open.size(); ++k)
+        asked[k] = {state[open[k]].batches, state[open[k]].estimated, achieved[open[k]]};
+      const std::vector<int> stops =
+          budgetShares(asked, budgetBatches - used, options.targetRelError, ceilingBatches);
+      if (stops.empty()) break;
       buildLitMap();
       if (options.progress)
         progress = std::make_unique<Progress>("bake (path budget)", open.size(), "probes");
@@ -684,7 +690,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         run(i, [&] {
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
-          const int stop = int(std::min<uint64_t>(uint64_t(ceilingBatches), uint64_t(st.batches) + share));
+          const int stop = stops[k];
           GuideSlot guide;
           guide.litPatches = needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop);
           while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))

@@ -684,7 +684,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   };
 
   // The path budget's pass over every traced probe of the finished level (deferBudget): what is left of the
-  // budget (plus the added probes' passes 1 and 2) after every probe's pass 2, shared evenly among the probes
+  // budget (plus the added probes' passes 1 and 2) after every probe's pass 2, shared among the probes
   // above the target (bakeProbesMerged's pass 3, each probe's own index its stream); then their SH, the
   // dilated probes' copies and the deringing again. The bake's figures become those of every traced probe.
   bool budgetSpent = !deferBudget || !baked;

@@ -37,9 +37,11 @@ struct BakeOptions {
   int maxSamplesPerProbe = 8192;
   // Adaptive sampling: paths the whole call may spend (0 = no more than each probe's maxSamplesPerProbe).
   // When the probes that reached their target and those stopped at maxSamplesPerProbe together used fewer, the
-  // rest is shared out evenly among the probes still above the target, in rounds (each probe at most
-  // kBakeBudgetCapFactor x maxSamplesPerProbe paths), so a small level whose light arrives through a gap
-  // converges instead of stopping at the cap. The shares depend only on path counts, never on threads.
+  // rest is shared among the probes still above the target, in rounds (each probe at most
+  // kBakeBudgetCapFactor x maxSamplesPerProbe paths), the noisier a probe the larger its share (the shares
+  // that minimise the mean error, from each probe's error and path count), so a small level whose light
+  // arrives through a gap converges instead of stopping at the cap. The shares depend only on the probes'
+  // states, never on threads.
   uint64_t pathBudget = 0;
   // Adaptive sampling: after the first samplesPerProbe paths, each pass that adds batches to a probe records
   // where its paths find light (an equal-area histogram of first directions) and, after 4 batches, draws

@@ -1,0 +1,61 @@
+// The path budget's shares (budget_shares.h): the allocation that minimises the sum of errors falling as
+// 1 / sqrt(paths). Minimising sum c_k / sqrt(n_k) over sum n_k = N gives c_k / n_k^(3/2) equal for every
+// probe, so n_k = lambda c_k^(2/3); lambda is found by bisection on the batches given (monotone in lambda),
+// each n_k clamped to [now, where it would reach the target or the ceiling].
+#include "tetraprobe/bake/budget_shares.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tetraprobe {
+
+std::vector<int> budgetShares(const std::vector<BudgetProbe>& open, uint64_t budget, double target,
+                              int ceiling) {
+  const size_t m = open.size();
+  if (m == 0 || budget == 0) return {};
+  std::vector<double> weight(m), lo(m), hi(m);  // in estimated batches: now, and where it would stop
+  double maxWeight = 0.0;
+  for (size_t k = 0; k < m; ++k) {
+    const double n = double(std::max(open[k].estimated, 0)), e = open[k].error;
+    const double room = double(std::max(ceiling - open[k].batches, 0));  // batches it may still take
+    const double need = std::isfinite(e) && target > 0.0 ? n * (e / target) * (e / target) - n : room;
+    lo[k] = n;
+    hi[k] = n + std::clamp(std::ceil(need), 0.0, room);
+    weight[k] = std::isfinite(e) && e >= 0.0 ? std::cbrt(e * e * n) : -1.0;  // (e sqrt(n))^(2/3)
+    maxWeight = std::max(maxWeight, weight[k]);
+  }
+  for (double& w : weight)
+    if (w < 0.0) w = maxWeight > 0.0 ? maxWeight : 1.0;
+  // Batches given at scale lambda: each probe lambda x weight estimated batches, within [lo, hi].
+  auto given = [&](double lambda, std::vector<double>* at) {
+    double sum = 0.0;
+    for (size_t k = 0; k < m; ++k) {
+      const double x = std::floor(std::clamp(lambda * weight[k], lo[k], hi[k]));
+      if (at) (*at)[k] = x;
+      sum += x - lo[k];
+    }
+    return sum;
+  };
+  // An upper scale that gives at least the budget or every probe all it would take.
+  double top = 1.0;
+  for (;;) {
+    if (given(top, nullptr) >= double(budget)) break;
+    bool capped = true;
+    for (size_t k = 0; k < m && capped; ++k) capped = top * weight[k] >= hi[k];
+    if (capped || !(top < 1e300)) break;
+    top *= 2.0;
+  }
+  double bottom = 0.0;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (bottom + top);
+    (given(mid, nullptr) <= double(budget) ? bottom : top) = mid;
+  }
+  std::vector<double> at(m);
+  if (given(bottom, &at) < 1.0) return {};
+  std::vector<int> stops(m);
+  for (size_t k = 0; k < m; ++k)
+    stops[k] = std::max(open[k].batches, std::min(ceiling, open[k].batches + int(at[k] - lo[k])));
+  return stops;
+}
+
+}  // namespace tetraprobe
