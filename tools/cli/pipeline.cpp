@@ -701,6 +701,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       all.probes.push_back(uint32_t(i));
       all.states.push_back(bakeState[i]);
     }
+    std::vector<ProbeBakeState>().swap(bakeState);  // `all` holds them now: one copy in memory, not two
     BakeStats total;
     const double before = stats.bake.seconds;
     BakeOptions bake = options.bake;
