@@ -174,15 +174,16 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   // The path budget's pass (BakeOptions::pathBudget, adaptive sampling) runs once, over the finished level:
   // every traced probe's state after its pass 2 is kept here, by probe index, so that the hole, refinement
   // and late probes share the budget with the probes placed first. (Spent on the first probes, as it was,
-  // it left the added ones, half of a level's traced probes, at the per-probe cap: on Veach Ajar a mean
-  // relative stderr of 0.13 against the first probes' 0.046.)
+  // it left the added ones, a third to a half of a level's traced probes, at the per-probe cap: on Veach Ajar
+  // their mean relative stderr was 0.09-0.21 against the first probes' 0.046.)
   const bool deferBudget =
       options.importShCsv.empty() && options.bake.targetRelError > 0.0 && options.bake.pathBudget > 0;
   std::vector<ProbeBakeState> bakeState;  // per probe; valid where hasBakeState
   std::vector<uint8_t> hasBakeState;
   double bakeFloor = 0.0;  // the first probes' floor (bakeErrorFloor), which the budget's pass measures by
-  // Paths of the added probes' passes 1 and 2: outside the budget, as they were when the budget was spent
-  // first, so the bake traces as many paths as before and only shares them out differently.
+  // Paths of the added probes' passes 1 and 2: outside the budget, as they were when the first call spent
+  // it, so a level whose first probes used the whole budget traces as many paths as before, shared out
+  // differently (one whose first probes left some gives it to the added ones).
   uint64_t addedPaths = 0;
   auto keepStates = [&](const ShardBake& r, size_t first, size_t count) {
     bakeState.resize(first + count);
@@ -490,7 +491,8 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   auto trace = [&](const std::vector<glm::dvec3>& at, uint64_t salt, BakeStats& more, ShardBake& states) {
     BakeOptions bake = options.bake;
     bake.seed = options.bake.seed ^ (salt * 0x9e3779b97f4a7c15ull);
-    // The path budget is the whole bake's: added probes get what the earlier passes left.
+    // The path budget is the whole bake's: without deferBudget, added probes get what the earlier passes left
+    // (with it, bakeDeferred traces their passes 1 and 2 only and spendBudget shares the budget later).
     bake.pathBudget = bake.pathBudget > stats.bake.paths ? bake.pathBudget - stats.bake.paths : 0;
     stage.reset();  // the bake and occlusion have progress of their own
     std::vector<ShRgb> sh = deferBudget ? bakeDeferred(at, bake, more, nullptr, nullptr, states)
