@@ -660,7 +660,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       }
     }
     // Pass 3 (BakeOptions::pathBudget): the unspent budget shared among the probes above the target
-    // (budgetStops), in rounds, each round sharing what the last left.
+    // (budgetShares), in rounds, each round sharing what the last left.
     auto batchesUsed = [&] {
       uint64_t n = 0;
       for (size_t i = 0; i < probes.size(); ++i) n += skipped(i) ? 0 : uint64_t(state[i].batches);
@@ -722,18 +722,11 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       stats->maxPathsPerProbe = std::max(stats->maxPathsPerProbe, n);
     }
     stats->probeRelError.assign(achieved.begin(), achieved.end());
-    achieved.erase(std::remove(achieved.begin(), achieved.end(), -1.0), achieved.end());
-    if (!achieved.empty()) {
-      std::vector<double> sorted = achieved;
-      std::sort(sorted.begin(), sorted.end());
-      double sum = 0.0;
-      for (double e : sorted) sum += std::isfinite(e) ? e : 0.0;
-      stats->meanRelError = sum / double(sorted.size());
-      stats->p95RelError =
-          sorted[std::min(sorted.size() - 1, size_t(std::ceil(0.95 * double(sorted.size()))) - 1)];
-      stats->maxRelError = sorted.back();
-      for (double e : achieved) stats->probesAtCap += e > options.targetRelError ? 1 : 0;
-    }
+    const RelErrorSummary summary = summarizeRelErrors(std::move(achieved), options.targetRelError);
+    stats->meanRelError = summary.mean;
+    stats->p95RelError = summary.p95;
+    stats->maxRelError = summary.max;
+    stats->probesAtCap = summary.above;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return out;
@@ -779,6 +772,23 @@ ShardBake bakeProbesShardPass2(const SceneTracer& tracer, const std::vector<glm:
   role.out = &out;
   role.pass1 = &pass1;
   bakeProbesImpl(tracer, probes, options, nullptr, skip, role);
+  return out;
+}
+
+RelErrorSummary summarizeRelErrors(std::vector<double> errors, double target) {
+  errors.erase(std::remove(errors.begin(), errors.end(), -1.0), errors.end());
+  RelErrorSummary out;
+  if (errors.empty()) return out;
+  std::sort(errors.begin(), errors.end());
+  double sum = 0.0;
+  for (double e : errors) {
+    sum += std::isfinite(e) ? e : 0.0;
+    out.above += e > target ? 1 : 0;
+  }
+  out.count = errors.size();
+  out.mean = sum / double(errors.size());
+  out.p95 = errors[std::min(errors.size() - 1, size_t(std::ceil(0.95 * double(errors.size()))) - 1)];
+  out.max = errors.back();
   return out;
 }
 

@@ -22,24 +22,20 @@ namespace tetraprobe::cli {
 namespace {
 
 // The bake's noise by the kind of probe (Level::probeKinds): per kind with traced probes, their count and the
-// mean and 95th percentile of their relative stderr (BakeStats::probeRelError, -1 where not traced), so a
-// report shows whether the probes added late (hole, refinement) are as converged as the first.
-nlohmann::json noiseByKind(const Level& level, const std::vector<float>& noise) {
+// mean and 95th percentile of their relative stderr (BakeStats::probeRelError, summarized as the headline
+// is), so a report shows whether the probes added late (hole, refinement) are as converged as the first.
+nlohmann::json noiseByKind(const Level& level, const std::vector<float>& noise, double target) {
   nlohmann::json out = nlohmann::json::object();
   if (noise.size() != level.probeKinds.size()) return out;
   std::vector<std::vector<double>> byKind(kLevelProbeKindCount);
   for (size_t i = 0; i < noise.size(); ++i)
     if (noise[i] >= 0.0f && uint8_t(level.probeKinds[i]) < kLevelProbeKindCount)
-      byKind[uint8_t(level.probeKinds[i])].push_back(std::isfinite(noise[i]) ? double(noise[i]) : 0.0);
+      byKind[uint8_t(level.probeKinds[i])].push_back(double(noise[i]));
   for (uint32_t k = 0; k < kLevelProbeKindCount; ++k) {
-    std::vector<double>& e = byKind[k];
-    if (e.empty()) continue;
-    std::sort(e.begin(), e.end());
-    double sum = 0.0;
-    for (double v : e) sum += v;
-    const size_t p95 = std::min(e.size() - 1, size_t(std::ceil(0.95 * double(e.size()))) - 1);
+    if (byKind[k].empty()) continue;
+    const RelErrorSummary e = summarizeRelErrors(std::move(byKind[k]), target);
     out[levelProbeKindName(LevelProbeKind(k))] = {
-        {"probes", e.size()}, {"mean_rel_stderr", sum / double(e.size())}, {"p95_rel_stderr", e[p95]}};
+        {"probes", e.count}, {"mean_rel_stderr", e.mean}, {"p95_rel_stderr", e.p95}};
   }
   return out;
 }
@@ -208,6 +204,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   // As stored: the tets' probe indices, packed (level_format.md, TETM; TETC for a streamed level).
   const uint64_t tetBytes = sectionBytes(fileSections(out), {"TETM", "TETC", "TETS"});
 
+  const nlohmann::json noiseKinds = noiseByKind(level, stats.bake.probeRelError, opt.bake.targetRelError);
   std::printf("tetraprobe bake: %s -> %s\n", scenePath.c_str(), out.c_str());
   glm::vec3 sceneLo, sceneHi;
   sceneBounds(scene, sceneLo, sceneHi);
@@ -263,10 +260,9 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
           opt.bake.targetRelError, stats.bake.meanRelError, stats.bake.p95RelError, stats.bake.maxRelError,
           stats.bake.probesAtCap, (unsigned long long)stats.bake.budgetPaths);
     // By kind, when more than one kind was traced: whether the probes added late converged as the first.
-    const nlohmann::json byKind = noiseByKind(level, stats.bake.probeRelError);
-    if (opt.bake.targetRelError > 0.0 && byKind.size() > 1) {
+    if (opt.bake.targetRelError > 0.0 && noiseKinds.size() > 1) {
       std::string text;
-      for (const auto& [name, k] : byKind.items()) {
+      for (const auto& [name, k] : noiseKinds.items()) {
         char item[96];
         std::snprintf(item, sizeof item, "%s%s %.4f / %.4f (%lld)", text.empty() ? "" : ", ", name.c_str(),
                       k.at("mean_rel_stderr").get<double>(), k.at("p95_rel_stderr").get<double>(),
@@ -436,7 +432,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                    {"probes_above_target", stats.bake.probesAtCap},
                    {"path_budget", opt.bake.pathBudget},
                    {"budget_paths", stats.bake.budgetPaths},
-                   {"by_kind", noiseByKind(level, stats.bake.probeRelError)}}},
+                   {"by_kind", noiseKinds}}},
                  {"imported", stats.importedProbes > 0}};
     j["occlusion"] = {{"mode", occlusionModeName(opt.occlusion.mode)},
                       {"none", level.occlusion.empty() ? level.tets.size() : stats.occlusion.none},

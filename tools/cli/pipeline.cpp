@@ -193,17 +193,15 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       hasBakeState[first + r.probes[k]] = 1;
     }
   };
-  // Passes 1 and 2 of `at` (its state kept for the budget's pass), and its SH from them.
+  // The SH of `at` from its passes 1 and 2: those of `given` (a merge's shard states), else traced into
+  // `states` (kept by the caller for the budget's pass).
   auto bakeDeferred = [&](const std::vector<glm::dvec3>& at, const BakeOptions& bake, BakeStats& more,
                           const std::vector<uint8_t>* skip, const ShardBake* given, ShardBake& states) {
     const auto t0 = std::chrono::steady_clock::now();
-    if (given)
-      states = *given;
-    else
-      states = bakeProbesShard(tracer, at, bake, std::vector<uint8_t>(at.size(), 1), skip);
+    if (!given) states = bakeProbesShard(tracer, at, bake, std::vector<uint8_t>(at.size(), 1), skip);
     BakeOptions noBudget = bake;
     noBudget.pathBudget = 0;
-    std::vector<ShRgb> sh = bakeProbesMerged(tracer, at, noBudget, states, &more, skip);
+    std::vector<ShRgb> sh = bakeProbesMerged(tracer, at, noBudget, given ? *given : states, &more, skip);
     more.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return sh;
   };
@@ -400,8 +398,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       return level;
     }
     if (deferBudget) {
-      ShardBake states;
-      level.sh = bakeDeferred(probes, options.bake, stats.bake, &skip, options.merged, states);
+      ShardBake traced;
+      level.sh = bakeDeferred(probes, options.bake, stats.bake, &skip, options.merged, traced);
+      const ShardBake& states = options.merged ? *options.merged : traced;
       keepStates(states, 0, probes.size());
       bakeFloor = states.floor;
     } else {

@@ -88,6 +88,16 @@ struct BakeStats {
   double raysPerSecond() const { return seconds > 0.0 ? double(rays()) / seconds : 0.0; }
 };
 
+// BakeStats's figures over a set of probes' relative standard errors (`errors`, -1 entries left out): their
+// count, mean (a non-finite error counts 0), 95th percentile (the element of rank ceil(0.95 count) - 1 in
+// increasing order), maximum, and how many are above `target`. All 0 for no error.
+struct RelErrorSummary {
+  size_t count = 0;
+  double mean = 0.0, p95 = 0.0, max = 0.0;
+  size_t above = 0;
+};
+RelErrorSummary summarizeRelErrors(std::vector<double> errors, double target);
+
 // Bakes one SH per probe (world-space positions). Deterministic for any `threads`. Adaptive sampling as
 // BakeOptions::targetRelError says (in two passes: every probe's first samplesPerProbe paths, then the rest
 // against the level-wide floor, so the result does not depend on the order probes are baked in).
