@@ -135,7 +135,9 @@ struct AdaptiveProbe {
   double acc[kShCoeffCount][3] = {};  // sum over the estimated batches of the batch SH
   int batches = 0;    // batches traced (they key the random streams and count against the caps)
   int estimated = 0;  // the last `estimated` of them, which acc, mean and m2 hold (restartEstimate)
-  double mean[6] = {}, m2[6] = {};  // Welford over those batches of Y(E(n)) at the six axis normals
+  double mean[6] = {}, m2[6] = {};            // Welford over those batches of Y(E(n)) at the six axis normals
+  std::array<float, kBakeGuideBins> guide{};  // the direction guide's histogram at the end of the last pass
+  int guideBatches = 0;                       // batches it holds
 };
 
 constexpr uint64_t kBatchRotationTag = 1ull << 62;
@@ -160,18 +162,37 @@ int passOneBatches(const BakeOptions& options) {
   return std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
 }
 
-// A probe's guide while one pass adds its batches (probe_guide.h): the histogram of this pass's paths and the
-// guide last built from it. Kept only for that loop, so a later pass (the path budget's rounds, or the merge
-// of a sharded bake) learns again from its own batches: the same result wherever it runs, and no state for
-// shards to carry.
+// A probe's guides while one pass adds its batches. The direction histogram (probe_guide.h) and the guide built
+// from it go on from the probe's earlier passes (AdaptiveProbe::guide, rounded to float between passes, so a
+// pass guides from its first batch wherever it runs: in the same process or in a sharded bake's merge, which
+// reads it from the shard's part file). The lit-patch histogram is the pass's own: its voxels are those of
+// the lit map the pass builds for its probes, which differs between calls.
 struct GuideSlot {
   GuideHistogram histogram;
   ProbeGuide guide;
   PatchHistogram patches;  // lit-patch sampling (BakeOptions::litPatches): the first hits' lit patches
   PatchGuide patchGuide;
   bool litPatches = false;  // this probe takes lit-patch sampling in this pass (needsLitPatches)
-  int batches = 0;          // batches recorded in `histogram`
+  int batches = 0;          // batches recorded in `histogram`, over every pass
+  int patchBatches = 0;     // batches recorded in `patches`, this pass
 };
+
+static_assert(kGuideBins == kBakeGuideBins, "ProbeBakeState::guide holds the direction histogram");
+
+// The slot a pass starts a probe with: the direction histogram its earlier passes learned, and its guide.
+GuideSlot resumeGuide(const AdaptiveProbe& st) {
+  GuideSlot slot;
+  for (int k = 0; k < kGuideBins; ++k) slot.histogram.sum[size_t(k)] = double(st.guide[size_t(k)]);
+  slot.batches = st.guideBatches;
+  if (slot.batches >= kGuideLearnBatches) slot.guide = ProbeGuide(slot.histogram);
+  return slot;
+}
+
+// What a pass leaves for the next: the direction histogram, rounded to float.
+void keepGuide(const GuideSlot& slot, AdaptiveProbe& st) {
+  for (int k = 0; k < kGuideBins; ++k) st.guide[size_t(k)] = float(slot.histogram.sum[size_t(k)]);
+  st.guideBatches = slot.batches;
+}
 
 // Whether a probe entering a pass with state st takes lit-patch sampling: only one that would stop at
 // `capBatches` above the target at its present rate (batches x (error / target)^2 > capBatches), since its
@@ -277,12 +298,13 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
   const bool patches = learn && litMap != nullptr && slot->litPatches;
   const PatchGuide* patchGuide = nullptr;
   if (learn && slot->batches >= kGuideLearnBatches) {
-    if (slot->batches % kGuideLearnBatches == 0) {
-      slot->guide = ProbeGuide(slot->histogram);
-      if (patches) slot->patchGuide = PatchGuide(slot->patches, tracer, *litMap);
-    }
+    if (slot->batches % kGuideLearnBatches == 0) slot->guide = ProbeGuide(slot->histogram);
     if (slot->guide.active()) guide = &slot->guide;
-    if (patches && slot->patchGuide.active()) patchGuide = &slot->patchGuide;
+  }
+  if (patches && slot->patchBatches >= kGuideLearnBatches) {
+    if (slot->patchBatches % kGuideLearnBatches == 0)
+      slot->patchGuide = PatchGuide(slot->patches, tracer, *litMap);
+    if (slot->patchGuide.active()) patchGuide = &slot->patchGuide;
   }
   if (patches && (guide || patchGuide) && st.estimated == st.batches) restartEstimate(st);
   // Unguided: kBakeBatchSize uniform directions, density 1 / (4 pi). Guided: half uniform, half from the
@@ -335,6 +357,7 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
       st.acc[i][c] += acc[i][c];
     }
   if (learn) ++slot->batches;
+  if (patches) ++slot->patchBatches;
   double q[6];
   axisLuminance(acc, q);
   ++st.batches;
@@ -468,6 +491,8 @@ void copySums(const From& from, To& to) {
     for (int c = 0; c < 3; ++c) to.acc[i][c] = from.acc[i][c];
   to.batches = from.batches;
   to.estimated = from.estimated;
+  to.guide = from.guide;
+  to.guideBatches = from.guideBatches;
   for (int k = 0; k < 6; ++k) {
     to.mean[k] = from.mean[k];
     to.m2[k] = from.m2[k];
@@ -523,6 +548,10 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
   } else {
     const int minBatches = passOneBatches(options);
     const int maxBatches = std::max(minBatches, options.maxSamplesPerProbe / kBakeBatchSize);
+    const int pass2Batches =
+        options.pass2MaxSamples > 0
+            ? std::clamp(options.pass2MaxSamples / kBakeBatchSize, minBatches, maxBatches)
+            : maxBatches;
     std::vector<AdaptiveProbe> state(probes.size());
     auto run = [&](size_t i, auto&& body) {
       if (!taps.empty()) {
@@ -631,11 +660,14 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         run(i, [&] {
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
-          GuideSlot guide;
+          GuideSlot guide = resumeGuide(st);
+          // Which probes take lit patches: those the flat cap would stop above the target, whether pass 2
+          // stops there or at pass2MaxSamples.
           guide.litPatches =
               needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
-          while (st.batches < maxBatches && !(adaptiveRelError(st, floor) <= options.targetRelError))
+          while (st.batches < pass2Batches && !(adaptiveRelError(st, floor) <= options.targetRelError))
             addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
+          keepGuide(guide, st);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;
@@ -667,7 +699,13 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       return n;
     };
     uint64_t used = batchesUsed();
-    const uint64_t budgetBatches = options.pathBudget / kBakeBatchSize;
+    uint64_t budgetBatches = options.pathBudget / kBakeBatchSize;
+    if (options.budgetCoversCaps && budgetBatches > 0) {
+      std::vector<BudgetProbe> all;
+      for (size_t i = 0; i < probes.size(); ++i)
+        if (!skipped(i)) all.push_back({state[i].batches, state[i].estimated, achieved[i]});
+      budgetBatches = std::max(budgetBatches, cappedSpend(all, options.targetRelError, maxBatches));
+    }
     const int ceilingBatches = maxBatches * kBakeBudgetCapFactor;
     const uint64_t usedBefore = used;
     for (int round = 0; round < 8 && used < budgetBatches; ++round) {
@@ -691,10 +729,17 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           DenormalScope denormals;
           AdaptiveProbe& st = state[i];
           const int stop = stops[k];
-          GuideSlot guide;
-          guide.litPatches = needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop);
+          GuideSlot guide = resumeGuide(st);
+          // A probe that restarted its estimate goes on with lit patches; one that would start them here
+          // (and restart) only when its share is at least the batches it would leave out of its estimate,
+          // so that a small share never leaves it an estimate of a batch or two.
+          const bool restarted = st.estimated < st.batches;
+          guide.litPatches =
+              restarted || (stop - st.batches >= st.batches &&
+                            needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop));
           while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
             addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
+          keepGuide(guide, st);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;

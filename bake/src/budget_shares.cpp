@@ -58,4 +58,26 @@ std::vector<int> budgetShares(const std::vector<BudgetProbe>& open, uint64_t bud
   return stops;
 }
 
+std::vector<int> flatStops(const std::vector<BudgetProbe>& open, double target, int cap) {
+  std::vector<int> stops(open.size());
+  for (size_t k = 0; k < open.size(); ++k) {
+    const BudgetProbe& p = open[k];
+    const double n = double(p.batches), est = double(std::max(p.estimated, 0)), e = p.error;
+    const double top = std::max(n, double(cap));
+    double stop = top;
+    if (std::isfinite(e) && e <= target)
+      stop = n;
+    else if (std::isfinite(e) && target > 0.0)
+      stop = std::clamp(n + std::ceil(est * ((e / target) * (e / target) - 1.0)), n, top);
+    stops[k] = int(stop);
+  }
+  return stops;
+}
+
+uint64_t cappedSpend(const std::vector<BudgetProbe>& probes, double target, int cap) {
+  uint64_t sum = 0;
+  for (int stop : flatStops(probes, target, cap)) sum += uint64_t(stop);
+  return sum;
+}
+
 }  // namespace tetraprobe

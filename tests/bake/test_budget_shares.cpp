@@ -1,12 +1,14 @@
 // The path budget's shares (budget_shares.h): within the budget, each probe's need and the ceiling; spending
 // what the probes can take; and minimising the modelled mean error, checked against a brute-force search and
-// against equal shares (the earlier rule).
+// against equal shares (the earlier rule). cappedSpend: what a flat cap spends, and sharing it from half the
+// cap against the flat cap.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "tetraprobe/bake/budget_shares.h"
@@ -119,6 +121,86 @@ TEST(BudgetShares, AProbeWithoutAFiniteErrorIsGivenAShareAsTheNoisiest) {
   EXPECT_GT(stops[1], open[1].batches);
   EXPECT_TRUE(budgetShares(open, 0, kTarget, kCeiling).empty());
   EXPECT_TRUE(budgetShares({}, 1000, kTarget, kCeiling).empty());
+}
+
+// cappedSpend against a flat cap run batch by batch under the model: each probe takes batches until its
+// modelled error is within the target or it holds `cap` batches. Equal but for the last batch's rounding.
+TEST(CappedSpend, IsWhatAFlatCapSpendsUnderTheModel) {
+  std::mt19937_64 rng(17);
+  constexpr int kCap = 128;
+  for (int trial = 0; trial < 100; ++trial) {
+    std::vector<BudgetProbe> probes = randomProbes(rng, 1 + rng() % 100);
+    for (size_t k = 0; k < probes.size(); k += 7) probes[k].error = kTarget * 0.5;  // already within
+    uint64_t flat = 0;
+    for (const BudgetProbe& p : probes) {
+      int n = p.batches;
+      while (n < kCap && p.error * std::sqrt(double(p.estimated) / (p.estimated + n - p.batches)) > kTarget)
+        ++n;
+      flat += uint64_t(n);
+    }
+    const uint64_t spend = cappedSpend(probes, kTarget, kCap);
+    EXPECT_GE(spend + probes.size(), flat) << "trial " << trial;
+    EXPECT_LE(spend, flat + probes.size()) << "trial " << trial;
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(cappedSpend({{4, 2, inf}}, kTarget, kCap), uint64_t(kCap));  // unknown error: the cap
+  EXPECT_EQ(cappedSpend({{300, 300, 0.5}}, kTarget, kCap), 300u);        // past the cap: what it holds
+  EXPECT_EQ(cappedSpend({{16, 16, 0.04}}, kTarget, kCap), 64u);          // (0.04 / 0.02)^2 x 16
+  EXPECT_EQ(cappedSpend({}, kTarget, kCap), 0u);
+}
+
+// What --share-caps does with these two functions: probes stopped at half the cap, then cappedSpend's batches
+// shared by budgetShares, against the flat cap on the same probes. The same batches or fewer in all, a
+// lower modelled mean error, and no probe past the ceiling. Each probe is modelled by its own constant
+// c = e sqrt(n) (the error it would have after n batches).
+TEST(CappedSpend, SharedFromHalfTheCapGivesALowerModelledErrorThanTheFlatCapForTheSameBatches) {
+  std::mt19937_64 rng(19);
+  constexpr int kCap = 128;
+  std::lognormal_distribution<double> cDist(std::log(0.02 * std::sqrt(64.0)), 0.9);
+  for (int trial = 0; trial < 50; ++trial) {
+    const size_t count = 50 + rng() % 250;
+    std::vector<double> c(count);
+    for (double& x : c) x = cDist(rng);
+    auto runTo = [&](size_t k, int cap) {  // batches taken to the target or `cap`, and the error then
+      int n = 4;
+      while (n < cap && c[k] / std::sqrt(double(n)) > kTarget) ++n;
+      return std::make_pair(n, c[k] / std::sqrt(double(n)));
+    };
+    uint64_t flatBatches = 0;
+    double flatSum = 0.0;
+    std::vector<BudgetProbe> half(count);
+    uint64_t used = 0;
+    for (size_t k = 0; k < count; ++k) {
+      const auto [n, e] = runTo(k, kCap);
+      flatBatches += uint64_t(n);
+      flatSum += e;
+      const auto [h, eh] = runTo(k, kCap / 2);
+      half[k] = {h, h, eh};
+      used += uint64_t(h);
+    }
+    const uint64_t budget = cappedSpend(half, kTarget, kCap);
+    ASSERT_LE(budget, flatBatches + count);
+    std::vector<BudgetProbe> open;
+    std::vector<size_t> which;
+    for (size_t k = 0; k < count; ++k)
+      if (half[k].error > kTarget) {
+        open.push_back(half[k]);
+        which.push_back(k);
+      }
+    const std::vector<int> stops = budgetShares(open, budget - used, kTarget, kCap * 16);
+    double sharedSum = 0.0;
+    uint64_t sharedBatches = used;
+    std::vector<double> e(count);
+    for (size_t k = 0; k < count; ++k) e[k] = half[k].error;
+    for (size_t m = 0; m < stops.size(); ++m) {
+      ASSERT_LE(stops[m], kCap * 16);
+      sharedBatches += uint64_t(stops[m] - open[m].batches);
+      e[which[m]] = std::max(kTarget, c[which[m]] / std::sqrt(double(stops[m])));
+    }
+    for (double x : e) sharedSum += x;
+    EXPECT_LE(sharedBatches, flatBatches + count) << "trial " << trial;
+    EXPECT_LT(sharedSum, flatSum) << "trial " << trial;
+  }
 }
 
 }  // namespace

@@ -95,10 +95,16 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        def("--lit-patches")},
       {"--path-budget", "", "N",
        "adaptive sampling: paths the bake may spend in all (the probes the hole and refinement rounds add "
-       "trace their first paths besides); once every probe is placed, when probes stop at --max-samples "
-       "above --noise and fewer were spent, the rest is shared among them (each at most 16 x --max-samples), "
-       "so a small level converges; 0 = none",
+       "trace their first paths besides); once every probe is placed, what is left (with --share-caps on, at "
+       "least what --max-samples a probe would have spent) is shared among the probes above --noise, the "
+       "noisier the more (each at most 16 x --max-samples), so a small level converges; 0 = none",
        def("--path-budget")},
+      {"--share-caps", "", "on|off",
+       "adaptive sampling with --path-budget: on: probes first stop at half of --max-samples, and the "
+       "budget, once every probe is placed, spends at least what --max-samples a probe would have (each "
+       "probe's paths to --noise as its error projects them, at most --max-samples), the noisier a probe "
+       "the larger its share; off: every probe up to --max-samples first, the budget only beyond",
+       def("--share-caps")},
       {"--content", "", "default|all",
        "default: everything but light arriving directly from point/spot/sun lights (drawn in real "
        "time); all: that too",
@@ -265,6 +271,9 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
   opt.bake.litPatches = lit == "off"     ? LitPatches::kOff
                         : lit == "probe" ? LitPatches::kProbe
                                          : LitPatches::kBounces;
+  if (args.str("--share-caps") != "on" && args.str("--share-caps") != "off")
+    throw UsageError("--share-caps must be on or off, not '" + args.str("--share-caps") + "'");
+  opt.shareCaps = args.str("--share-caps") == "on";
   const double pathBudget = args.number("--path-budget");
   if (!(pathBudget >= 0.0 && pathBudget <= 1e15))
     throw UsageError("--path-budget must be a number of paths in [0, 1e15]");
@@ -365,6 +374,7 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
                        : o.bake.litPatches == LitPatches::kProbe ? "probe"
                                                                  : "bounces");
   add("--path-budget", std::to_string(o.bake.pathBudget));
+  add("--share-caps", o.shareCaps ? "on" : "off");
   if (o.bake.content != kContentDefault && o.bake.content != kContentAll)
     throw std::logic_error("levelOptions: content flags " + std::to_string(o.bake.content) +
                            " are neither default nor all");

@@ -17,8 +17,8 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "part files are written on little-endian hosts");
 
-constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '2'};
-constexpr size_t kRecordBytes = 4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8;
+constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '3'};
+constexpr size_t kRecordBytes = 4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8 + 4 * kBakeGuideBins + 4;
 
 uint64_t fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -160,6 +160,8 @@ void writeShardPart(const std::string& path, const ShardPart& part) {
     w.put(s.achieved);
     w.put(s.intersectRays);
     w.put(s.occludedRays);
+    for (float v : s.guide) w.put(v);
+    w.put(s.guideBatches);
   }
   w.put(fnv1a(w.bytes.data(), w.bytes.size()));
   std::string error;
@@ -213,6 +215,9 @@ ShardPart readShardPart(const std::string& path) {
     s.achieved = r.get<double>();
     s.intersectRays = r.get<uint64_t>();
     s.occludedRays = r.get<uint64_t>();
+    for (float& v : s.guide) v = r.get<float>();
+    s.guideBatches = r.get<int32_t>();
+    if (s.guideBatches < 0 || s.guideBatches > s.batches) r.fail("bad guide batch count");
   }
   if (r.at() + 8 != bytes.size()) r.fail("trailing bytes");
   return p;

@@ -43,6 +43,15 @@ struct BakeOptions {
   // arrives through a gap converges instead of stopping at the cap. The shares depend only on the probes'
   // states, never on threads.
   uint64_t pathBudget = 0;
+  // Adaptive sampling: pass 2 stops a probe at this many paths (0 = maxSamplesPerProbe; rounded down to
+  // batches, within [samplesPerProbe, maxSamplesPerProbe]), leaving the rest to the budget's pass.
+  int pass2MaxSamples = 0;
+  // Adaptive sampling with a path budget: the budget's pass spends at least what a flat cap of
+  // maxSamplesPerProbe would have (budget_shares.h, cappedSpend: each traced probe's paths to the target as
+  // its error projects them, at most the cap), so a level whose probes stop at the cap traces about as many
+  // paths as with the flat cap, shared by the error. With pass2MaxSamples below the cap (the bake pipeline's
+  // --share-caps), the probes that need fewer give paths to those that need more.
+  bool budgetCoversCaps = false;
   // Adaptive sampling: after the first samplesPerProbe paths, each pass that adds batches to a probe records
   // where its paths find light (an equal-area histogram of first directions) and, after 4 batches, draws
   // half of each batch's directions from it (bake/src/probe_guide.h; unbiased: every direction weighted by
@@ -134,6 +143,9 @@ std::vector<ShRgb> bakeProbes(const SceneTracer& tracer, const std::vector<glm::
 // bakeProbesMerged(shards' states) is bit-identical to bakeProbes with the same arguments.
 
 // One probe's adaptive accumulator after pass 2 (the sums bakeProbes keeps, in double).
+// Bins of the direction guide's histogram a probe carries from pass to pass (bake/src/probe_guide.h).
+inline constexpr int kBakeGuideBins = 128;
+
 struct ProbeBakeState {
   double acc[kShCoeffCount][3] = {};  // sum over the estimated batches of the batch SH (W/(m^2 sr))
   int32_t batches = 0;                // batches of kBakeBatchSize paths taken
@@ -141,6 +153,10 @@ struct ProbeBakeState {
                                       // guided one under lit-patch sampling)
   double mean[6] = {}, m2[6] = {};    // Welford over those of the luminance of E at the six axis normals
   double achieved = -1.0;             // relative standard error reached against the floor
+  // The direction guide learned from its batches after pass 1 (light per bin, rounded to float at the end of
+  // each pass) and how many batches it holds: a later pass (the path budget's) guides from its first batch.
+  std::array<float, kBakeGuideBins> guide{};
+  int32_t guideBatches = 0;
   uint64_t intersectRays = 0, occludedRays = 0;  // rays this probe's passes 1-2 traced (BakeStats)
 };
 

@@ -25,4 +25,12 @@ struct BudgetProbe {
 std::vector<int> budgetShares(const std::vector<BudgetProbe>& open, uint64_t budget, double target,
                               int ceiling);
 
+// The batches a flat per-probe cap would spend on `probes` in all: the sum of flatStops.
+uint64_t cappedSpend(const std::vector<BudgetProbe>& probes, double target, int cap);
+
+// Each probe's stop under a flat cap: its batches now where its error is within `target`, else where the model
+// above says it reaches the target (n + n_est ((e / target)^2 - 1)), at least its batches now and at most
+// max(its batches now, cap); a probe whose error is not finite stops at the cap. Pure function of its arguments.
+std::vector<int> flatStops(const std::vector<BudgetProbe>& open, double target, int cap);
+
 }  // namespace tetraprobe
