@@ -245,18 +245,20 @@ TEST_F(Cli, BadInputExitsTwoAndLeavesNoOutput) {
 
 // A sharded bake (bake --shard I/N, merge) gives the one-process bake's level byte for byte, here with two
 // shards run one after the other (tools/distributed/run_local.sh runs three at once on the sample level,
-// with refinement; here one hole round and no refinement keep it to seconds). With probe guiding too: each
-// pass learns its guides again from the batches it adds (a shard's pass 2, the merge's path budget).
+// with refinement; here one hole round and no refinement keep it to seconds). With probe guiding too: the
+// merge's path budget goes on with the direction guide each shard's pass 2 learned (the part file carries it);
+// and with --share-caps on, where the merge's pass traces half of the capped probes' paths (any thread count:
+// the same bytes).
 TEST_F(Cli, MergedShardsEqualOneProcessBake) {
   write("box.obj", kBoxObj);
   write("box.mtl", kBoxMtl);
-  for (const std::string guide : {"off", "on"}) {
-    SCOPED_TRACE("--guide " + guide);
+  for (const std::string settings : {"--guide off", "--guide on", "--guide on --share-caps on"}) {
+    SCOPED_TRACE(settings);
     const std::string base =
         "bake " + path("box.obj").string() +
         " --samples 32 --max-samples 256 --path-budget 100000 --spacing 0.75 --threads 2 --fill-holes 1 "
-        "--probe-budget 0 --guide " +
-        guide;
+        "--probe-budget 0 " +
+        settings;
     for (int i = 0; i < 2; ++i) {
       const CliRun r = run(base + " --shard " + std::to_string(i) + "/2 -o " +
                            path("s" + std::to_string(i) + ".part").string());
@@ -269,6 +271,12 @@ TEST_F(Cli, MergedShardsEqualOneProcessBake) {
     const std::string a = slurp(path("merged.tpb")), b = slurp(path("one.tpb"));
     ASSERT_FALSE(a.empty());
     EXPECT_TRUE(a == b) << "merged level differs from the one-process bake";
+    if (settings.find("share-caps") != std::string::npos) {  // and any thread count gives those bytes
+      const std::string single = base.substr(0, base.find("--threads 2")) + "--threads 1" +
+                                 base.substr(base.find("--threads 2") + std::string("--threads 2").size());
+      ASSERT_EQ(run(single + " -o " + path("single.tpb").string()).code, 0);
+      EXPECT_TRUE(slurp(path("single.tpb")) == b) << "--threads 1 differs from --threads 2";
+    }
   }
 }
 
