@@ -138,6 +138,8 @@ struct AdaptiveProbe {
   double mean[6] = {}, m2[6] = {};            // Welford over those batches of Y(E(n)) at the six axis normals
   std::array<float, kBakeGuideBins> guide{};  // the direction guide's histogram at the end of the last pass
   int guideBatches = 0;                       // batches it holds
+  std::vector<std::pair<uint64_t, double>> patches;  // the lit-patch histogram (with a fixed lit map)
+  int patchBatches = 0;
 };
 
 constexpr uint64_t kBatchRotationTag = 1ull << 62;
@@ -165,8 +167,9 @@ int passOneBatches(const BakeOptions& options) {
 // A probe's guides while one pass adds its batches. The direction histogram (probe_guide.h) and the guide built
 // from it go on from the probe's earlier passes (AdaptiveProbe::guide, rounded to float between passes, so a
 // pass guides from its first batch wherever it runs: in the same process or in a sharded bake's merge, which
-// reads it from the shard's part file). The lit-patch histogram is the pass's own: its voxels are those of
-// the lit map the pass builds for its probes, which differs between calls.
+// reads it from the shard's part file). The lit-patch histogram goes on too where BakeOptions::litVoxel fixes
+// the lit map for every call; else it is the pass's own (its voxels are those of the map the call builds for
+// its probes, which differs between calls).
 struct GuideSlot {
   GuideHistogram histogram;
   ProbeGuide guide;
@@ -174,7 +177,8 @@ struct GuideSlot {
   PatchGuide patchGuide;
   bool litPatches = false;  // this probe takes lit-patch sampling in this pass (needsLitPatches)
   int batches = 0;          // batches recorded in `histogram`, over every pass
-  int patchBatches = 0;     // batches recorded in `patches`, this pass
+  int patchBatches = 0;     // batches recorded in `patches`
+  bool patchGuideBuilt = false;
 };
 
 static_assert(kGuideBins == kBakeGuideBins, "ProbeBakeState::guide holds the direction histogram");
@@ -185,13 +189,22 @@ GuideSlot resumeGuide(const AdaptiveProbe& st) {
   for (int k = 0; k < kGuideBins; ++k) slot.histogram.sum[size_t(k)] = double(st.guide[size_t(k)]);
   slot.batches = st.guideBatches;
   if (slot.batches >= kGuideLearnBatches) slot.guide = ProbeGuide(slot.histogram);
+  for (const auto& [key, value] : st.patches) slot.patches.sum[key] = value;
+  slot.patchBatches = st.patchBatches;
   return slot;
 }
 
-// What a pass leaves for the next: the direction histogram, rounded to float.
-void keepGuide(const GuideSlot& slot, AdaptiveProbe& st) {
+// What a pass leaves for the next: the direction histogram, rounded to float; with a fixed lit map
+// (`carryPatches`), the lit-patch histogram by key.
+void keepGuide(const GuideSlot& slot, AdaptiveProbe& st, bool carryPatches) {
   for (int k = 0; k < kGuideBins; ++k) st.guide[size_t(k)] = float(slot.histogram.sum[size_t(k)]);
   st.guideBatches = slot.batches;
+  st.patches.clear();
+  st.patchBatches = 0;
+  if (!carryPatches) return;
+  st.patches.assign(slot.patches.sum.begin(), slot.patches.sum.end());
+  std::sort(st.patches.begin(), st.patches.end());
+  st.patchBatches = slot.patchBatches;
 }
 
 // Whether a probe entering a pass with state st takes lit-patch sampling: only one that would stop at
@@ -229,6 +242,14 @@ double litVoxelEdge(const std::vector<glm::dvec3>& probes, const std::function<b
   const double edge = std::cbrt(std::max(e.x, f) * std::max(e.y, f) * std::max(e.z, f) / double(count));
   return edge > 0.0 && std::isfinite(edge) ? edge : 1.0;
 }
+
+}  // namespace
+
+double litMapVoxelEdge(const std::vector<glm::dvec3>& probes, const std::vector<uint8_t>* skip) {
+  return litVoxelEdge(probes, [&](size_t i) { return skip != nullptr && (*skip)[i] != 0; });
+}
+
+namespace {
 
 // Whether batch b of a probe takes part in guiding (recorded, and guided once kGuideLearnBatches are in):
 // adaptive sampling asked for it and the first samplesPerProbe paths (pass 1, which every probe takes) are
@@ -302,8 +323,10 @@ void addBatch(const SceneTracer& tracer, const glm::vec3& probe, size_t index, c
     if (slot->guide.active()) guide = &slot->guide;
   }
   if (patches && slot->patchBatches >= kGuideLearnBatches) {
-    if (slot->patchBatches % kGuideLearnBatches == 0)
+    if (slot->patchBatches % kGuideLearnBatches == 0 || !slot->patchGuideBuilt) {
       slot->patchGuide = PatchGuide(slot->patches, tracer, *litMap);
+      slot->patchGuideBuilt = true;
+    }
     if (slot->patchGuide.active()) patchGuide = &slot->patchGuide;
   }
   if (patches && (guide || patchGuide) && st.estimated == st.batches) restartEstimate(st);
@@ -493,6 +516,8 @@ void copySums(const From& from, To& to) {
   to.estimated = from.estimated;
   to.guide = from.guide;
   to.guideBatches = from.guideBatches;
+  to.patches = from.patches;
+  to.patchBatches = from.patchBatches;
   for (int k = 0; k < 6; ++k) {
     to.mean[k] = from.mean[k];
     to.m2[k] = from.m2[k];
@@ -570,7 +595,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
     const LitMap* litMapUsed = nullptr;  // set (serially) before each pass that guides
     auto buildLitMap = [&] {
       if (usesLitMap && !lit) {
-        const double voxel = litVoxelEdge(probes, skipped);
+        const double voxel = options.litVoxel > 0.0 ? options.litVoxel : litVoxelEdge(probes, skipped);
         lit.emplace(tracer, voxel * voxel / 16.0, voxel, options.seed, options.threads);
       }
       if (lit) litMapUsed = &*lit;
@@ -667,7 +692,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
               needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
           while (st.batches < pass2Batches && !(adaptiveRelError(st, floor) <= options.targetRelError))
             addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
-          keepGuide(guide, st);
+          keepGuide(guide, st, options.litVoxel > 0.0);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;
@@ -739,7 +764,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
                             needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop));
           while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
             addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
-          keepGuide(guide, st);
+          keepGuide(guide, st, options.litVoxel > 0.0);
           achieved[i] = adaptiveRelError(st, floor);
         });
         paths[i] = state[i].batches * kBakeBatchSize;

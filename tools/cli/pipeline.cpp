@@ -402,6 +402,9 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       throw InputError("the shards placed " + std::to_string(options.expectedProbeCount) +
                        " probes, this placement " + std::to_string(probes.size()));
     stage.reset();  // the bake has progress of its own
+    // With --share-caps, one lit map for every call of the bake, so the probes' lit-patch histograms carry
+    // from pass to pass (BakeOptions::litVoxel).
+    if (options.shareCaps && deferBudget) options.bake.litVoxel = litMapVoxelEdge(probes, &skip);
     if (options.shardCount > 0) {
       const std::vector<uint8_t> own = shardOwnership(probes, options.shardIndex, options.shardCount);
       *options.shardOut =

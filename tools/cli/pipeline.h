@@ -42,12 +42,12 @@ struct PipelineOptions {
     b.threads = 0;
     return b;
   }();
-  // With adaptive sampling and a path budget, true: pass 2 stops each probe at half of maxSamplesPerProbe, and
-  // the budget's pass, over the finished level, spends at least what the flat cap would have, shared by the
-  // error (BakeOptions::pass2MaxSamples, budgetCoversCaps; set by buildLevel). false (the default): the flat
-  // cap first, then the budget beyond it. Off by default: it lowers the probes' noise on levels lit through
-  // openings but not the error at the scenes' cameras (docs/accuracy.md#the-caps-shared-by-the-error).
-  bool shareCaps = false;
+  // With adaptive sampling and a path budget, true (the default): pass 2 stops each probe at half of
+  // maxSamplesPerProbe, and the budget's pass, over the finished level, spends at least what the flat cap
+  // would have, shared by the error (BakeOptions::pass2MaxSamples, budgetCoversCaps), with one lit map for
+  // every call of the bake so that lit-patch histograms go on from pass to pass (BakeOptions::litVoxel); all
+  // set by buildLevel. false: the flat cap first, then the budget beyond it.
+  bool shareCaps = true;
   DeringOptions dering;  // auto; applied to baked and imported SH alike
 
   // Placement (tetra/placement.h): "voxel" (adaptive voxels + push-out + merge + fillers; the default),

@@ -103,7 +103,8 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "adaptive sampling with --path-budget: on: probes first stop at half of --max-samples, and the "
        "budget, once every probe is placed, spends at least what --max-samples a probe would have (each "
        "probe's paths to --noise as its error projects them, at most --max-samples), the noisier a probe "
-       "the larger its share; off: every probe up to --max-samples first, the budget only beyond",
+       "the larger its share (one lit map for the whole bake); off: every probe up to --max-samples first, "
+       "the budget only beyond",
        def("--share-caps")},
       {"--content", "", "default|all",
        "default: everything but light arriving directly from point/spot/sun lights (drawn in real "

@@ -18,7 +18,8 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "part files are written on little-endian hosts");
 
 constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '3'};
-constexpr size_t kRecordBytes = 4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8 + 4 * kBakeGuideBins + 4;
+constexpr size_t kRecordBytes =
+    4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8 + 4 * kBakeGuideBins + 4 + 4 + 4;
 
 uint64_t fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -162,6 +163,12 @@ void writeShardPart(const std::string& path, const ShardPart& part) {
     w.put(s.occludedRays);
     for (float v : s.guide) w.put(v);
     w.put(s.guideBatches);
+    w.put(uint32_t(s.patches.size()));
+    for (const auto& [key, value] : s.patches) {
+      w.put(key);
+      w.put(value);
+    }
+    w.put(s.patchBatches);
   }
   w.put(fnv1a(w.bytes.data(), w.bytes.size()));
   std::string error;
@@ -218,6 +225,15 @@ ShardPart readShardPart(const std::string& path) {
     for (float& v : s.guide) v = r.get<float>();
     s.guideBatches = r.get<int32_t>();
     if (s.guideBatches < 0 || s.guideBatches > s.batches) r.fail("bad guide batch count");
+    const uint32_t patches = r.get<uint32_t>();
+    if (patches > (bytes.size() - r.at()) / 16) r.fail("bad lit-patch histogram size");
+    s.patches.resize(patches);
+    for (auto& [key, value] : s.patches) {
+      key = r.get<uint64_t>();
+      value = r.get<double>();
+    }
+    s.patchBatches = r.get<int32_t>();
+    if (s.patchBatches < 0 || s.patchBatches > s.batches) r.fail("bad lit-patch batch count");
   }
   if (r.at() + 8 != bytes.size()) r.fail("trailing bytes");
   return p;

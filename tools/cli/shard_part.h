@@ -42,7 +42,8 @@ uint64_t sceneContentHash(const Scene& scene);
 // Layout (little-endian, fields one by one): magic "TPSHARD3", u32 stage, u32 index, u32 count, u64 probeCount,
 // u64 sceneHash, f64 floor, u64 options bytes + the bytes, u64 K, then K records (u32 probe, f64 acc[27],
 // i32 batches, i32 estimated, f64 mean[6], f64 m2[6], f64 achieved, u64 intersectRays, u64 occludedRays,
-// f32 guide[128], i32 guideBatches), then u64 FNV-1a
+// f32 guide[128], i32 guideBatches, u32 P, P x (u64 lit-patch voxel key, f64 light), i32 patchBatches),
+// then u64 FNV-1a
 // of every byte before it. Written atomically (temp + rename); throws std::runtime_error when it cannot be.
 void writeShardPart(const std::string& path, const ShardPart& part);
 

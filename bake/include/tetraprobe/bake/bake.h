@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -52,6 +53,10 @@ struct BakeOptions {
   // paths as with the flat cap, shared by the error. With pass2MaxSamples below the cap (the bake pipeline's
   // --share-caps), the probes that need fewer give paths to those that need more.
   bool budgetCoversCaps = false;
+  // Lit-patch sampling: the lit map's voxel edge (0 = from the call's probes, litMapVoxelEdge). Given, every
+  // call of a bake builds the same map, and a probe's lit-patch histogram goes on from pass to pass as its
+  // direction guide does (ProbeBakeState::patches).
+  double litVoxel = 0.0;
   // Adaptive sampling: after the first samplesPerProbe paths, each pass that adds batches to a probe records
   // where its paths find light (an equal-area histogram of first directions) and, after 4 batches, draws
   // half of each batch's directions from it (bake/src/probe_guide.h; unbiased: every direction weighted by
@@ -157,8 +162,15 @@ struct ProbeBakeState {
   // each pass) and how many batches it holds: a later pass (the path budget's) guides from its first batch.
   std::array<float, kBakeGuideBins> guide{};
   int32_t guideBatches = 0;
+  // With BakeOptions::litVoxel: the lit-patch histogram learned so far (lit-map voxel key, light; by key) and
+  // the batches it holds.
+  std::vector<std::pair<uint64_t, double>> patches;
+  int32_t patchBatches = 0;
   uint64_t intersectRays = 0, occludedRays = 0;  // rays this probe's passes 1-2 traced (BakeStats)
 };
+
+// The lit map's voxel edge for `probes` (those `skip` does not name): cbrt(box volume / count).
+double litMapVoxelEdge(const std::vector<glm::dvec3>& probes, const std::vector<uint8_t>* skip);
 
 struct ShardBake {
   double floor = 0.0;                  // kBakeErrorFloor x the level's median pass-1 mean (all probes)
