@@ -164,6 +164,17 @@ int passOneBatches(const BakeOptions& options) {
   return std::max(2, (options.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize);
 }
 
+// Batches of adaptive sampling's per-probe cap (maxSamplesPerProbe), at least pass 1's.
+int capBatches(const BakeOptions& options) {
+  return std::max(passOneBatches(options), options.maxSamplesPerProbe / kBakeBatchSize);
+}
+
+// A probe's state as the budget's shares see it.
+template <class State>
+BudgetProbe budgetProbe(const State& st, double error) {
+  return {st.batches, st.estimated, error};
+}
+
 // A probe's guides while one pass adds its batches. The direction histogram (probe_guide.h) and the guide built
 // from it go on from the probe's earlier passes (AdaptiveProbe::guide, rounded to float between passes, so a
 // pass guides from its first batch wherever it runs: in the same process or in a sharded bake's merge, which
@@ -572,7 +583,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
     });
   } else {
     const int minBatches = passOneBatches(options);
-    const int maxBatches = std::max(minBatches, options.maxSamplesPerProbe / kBakeBatchSize);
+    const int maxBatches = capBatches(options);
     const int pass2Batches =
         options.pass2MaxSamples > 0
             ? std::clamp(options.pass2MaxSamples / kBakeBatchSize, minBatches, maxBatches)
@@ -601,6 +612,21 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
       if (lit) litMapUsed = &*lit;
     };
     double floor = 0.0;
+    // Probe i's batches until its target or `stop`, going on with the guides its earlier passes learned;
+    // lit-patch sampling where takesLitPatches(its state) says.
+    auto traceTo = [&](size_t i, int stop, auto&& takesLitPatches) {
+      run(i, [&] {
+        DenormalScope denormals;
+        AdaptiveProbe& st = state[i];
+        GuideSlot guide = resumeGuide(st);
+        guide.litPatches = takesLitPatches(st);
+        while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
+          addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
+        keepGuide(guide, st, options.litVoxel > 0.0);
+        achieved[i] = adaptiveRelError(st, floor);
+      });
+      paths[i] = state[i].batches * kBakeBatchSize;
+    };
     achieved.assign(probes.size(), -1.0);
     if (role.resume) {
       // The merge: every traced probe's state after pass 2 comes from the shards, exactly once.
@@ -682,20 +708,11 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           paths[i] = 0;
           return;
         }
-        run(i, [&] {
-          DenormalScope denormals;
-          AdaptiveProbe& st = state[i];
-          GuideSlot guide = resumeGuide(st);
-          // Which probes take lit patches: those the flat cap would stop above the target, whether pass 2
-          // stops there or at pass2MaxSamples.
-          guide.litPatches =
-              needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
-          while (st.batches < pass2Batches && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
-          keepGuide(guide, st, options.litVoxel > 0.0);
-          achieved[i] = adaptiveRelError(st, floor);
+        // Which probes take lit patches: those the flat cap would stop above the target, whether pass 2
+        // stops there or at pass2MaxSamples.
+        traceTo(i, pass2Batches, [&](const AdaptiveProbe& st) {
+          return needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
         });
-        paths[i] = state[i].batches * kBakeBatchSize;
         if (progress) progress->advance();
       });
       if (progress) progress->finish();
@@ -725,10 +742,10 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
     };
     uint64_t used = batchesUsed();
     uint64_t budgetBatches = options.pathBudget / kBakeBatchSize;
-    if (options.budgetCoversCaps && budgetBatches > 0) {
+    if (options.pass2MaxSamples > 0 && budgetBatches > 0) {
       std::vector<BudgetProbe> all;
       for (size_t i = 0; i < probes.size(); ++i)
-        if (!skipped(i)) all.push_back({state[i].batches, state[i].estimated, achieved[i]});
+        if (!skipped(i)) all.push_back(budgetProbe(state[i], achieved[i]));
       budgetBatches = std::max(budgetBatches, cappedSpend(all, options.targetRelError, maxBatches));
     }
     const int ceilingBatches = maxBatches * kBakeBudgetCapFactor;
@@ -740,8 +757,7 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           open.push_back(i);
       if (open.empty()) break;
       std::vector<BudgetProbe> asked(open.size());
-      for (size_t k = 0; k < open.size(); ++k)
-        asked[k] = {state[open[k]].batches, state[open[k]].estimated, achieved[open[k]]};
+      for (size_t k = 0; k < open.size(); ++k) asked[k] = budgetProbe(state[open[k]], achieved[open[k]]);
       const std::vector<int> stops =
           budgetShares(asked, budgetBatches - used, options.targetRelError, ceilingBatches);
       if (stops.empty()) break;
@@ -750,24 +766,15 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         progress = std::make_unique<Progress>("bake (path budget)", open.size(), "probes");
       parallelFor(open.size(), options.threads, [&](size_t k) {
         const size_t i = open[k];
-        run(i, [&] {
-          DenormalScope denormals;
-          AdaptiveProbe& st = state[i];
-          const int stop = stops[k];
-          GuideSlot guide = resumeGuide(st);
-          // A probe that restarted its estimate goes on with lit patches; one that would start them here
-          // (and restart) only when its share is at least the batches it would leave out of its estimate,
-          // so that a small share never leaves it an estimate of a batch or two.
-          const bool restarted = st.estimated < st.batches;
-          guide.litPatches =
-              restarted || (stop - st.batches >= st.batches &&
-                            needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop));
-          while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
-            addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
-          keepGuide(guide, st, options.litVoxel > 0.0);
-          achieved[i] = adaptiveRelError(st, floor);
+        const int stop = stops[k];
+        // A probe that restarted its estimate goes on with lit patches; one that would start them here (and
+        // restart) only when its share is at least the batches it would leave out of its estimate, so that a
+        // small share never leaves it an estimate of a batch or two.
+        traceTo(i, stop, [&](const AdaptiveProbe& st) {
+          return st.estimated < st.batches ||
+                 (stop - st.batches >= st.batches &&
+                  needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop));
         });
-        paths[i] = state[i].batches * kBakeBatchSize;
         if (progress) progress->advance();
       });
       if (progress) progress->finish();
@@ -860,6 +867,12 @@ RelErrorSummary summarizeRelErrors(std::vector<double> errors, double target) {
   out.p95 = errors[std::min(errors.size() - 1, size_t(std::ceil(0.95 * double(errors.size()))) - 1)];
   out.max = errors.back();
   return out;
+}
+
+uint64_t flatCapPaths(const ShardBake& states, const BakeOptions& options) {
+  std::vector<BudgetProbe> probes;
+  for (const ProbeBakeState& s : states.states) probes.push_back(budgetProbe(s, s.achieved));
+  return cappedSpend(probes, options.targetRelError, capBatches(options)) * uint64_t(kBakeBatchSize);
 }
 
 double probeBakeMean(const ProbeBakeState& state) {

@@ -9,6 +9,16 @@
 
 namespace tetraprobe {
 
+namespace {
+
+// Batches after its `n` estimated ones at which a probe at error e reaches `target` by the model (e falls as
+// 1 / sqrt(n)): n (e / target)^2 - n, unrounded. Needs finite e and target > 0.
+double batchesToTarget(double n, double e, double target) {
+  return n * (e / target) * (e / target) - n;
+}
+
+}  // namespace
+
 std::vector<int> budgetShares(const std::vector<BudgetProbe>& open, uint64_t budget, double target,
                               int ceiling) {
   const size_t m = open.size();
@@ -18,7 +28,7 @@ std::vector<int> budgetShares(const std::vector<BudgetProbe>& open, uint64_t bud
   for (size_t k = 0; k < m; ++k) {
     const double n = double(std::max(open[k].estimated, 0)), e = open[k].error;
     const double room = double(std::max(ceiling - open[k].batches, 0));  // batches it may still take
-    const double need = std::isfinite(e) && target > 0.0 ? n * (e / target) * (e / target) - n : room;
+    const double need = std::isfinite(e) && target > 0.0 ? batchesToTarget(n, e, target) : room;
     lo[k] = n;
     hi[k] = n + std::clamp(std::ceil(need), 0.0, room);
     weight[k] = std::isfinite(e) && e >= 0.0 ? std::cbrt(e * e * n) : -1.0;  // (e sqrt(n))^(2/3)
@@ -68,7 +78,7 @@ std::vector<int> flatStops(const std::vector<BudgetProbe>& open, double target, 
     if (std::isfinite(e) && e <= target)
       stop = n;
     else if (std::isfinite(e) && target > 0.0)
-      stop = std::clamp(n + std::ceil(est * ((e / target) * (e / target) - 1.0)), n, top);
+      stop = std::clamp(n + std::ceil(batchesToTarget(est, e, target)), n, top);
     stops[k] = int(stop);
   }
   return stops;

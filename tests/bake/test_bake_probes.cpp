@@ -525,6 +525,21 @@ BakeSums expectBakesAgree(const std::vector<ShRgb>& a, const BakeStats& aStats, 
   return sums;
 }
 
+// The spotlit room, its probes, and its uniform bake: 8,192 paths a probe exactly (a target never reached), no
+// guide.
+struct SpotlitBake {
+  Scene scene = spotlitRoom();
+  SceneTracer tracer{scene};
+  std::vector<glm::dvec3> probes = spotlitProbes();
+  BakeOptions off = [] {
+    BakeOptions o = quiet(kUnboundedBounces, 128, kContentDefault);
+    o.targetRelError = 1e-4;
+    o.maxSamplesPerProbe = 8192;
+    o.guide = false;
+    return o;
+  }();
+};
+
 // Guiding draws directions from a histogram, but every direction is weighted by the mixture's density, so
 // the estimate's expectation is the unguided one's: on the spotlit room, with both at 8,192 paths a probe,
 // the irradiance at the six axis normals of every probe agrees within 4 combined standard errors (each
@@ -532,25 +547,13 @@ BakeSums expectBakesAgree(const std::vector<ShRgb>& a, const BakeStats& aStats, 
 // a false alarm overall). The guided bake's noise at the same paths is lower (the gain guiding is for), it is
 // bit-identical for 1 and 2 threads, and a bake that stops at its first samplesPerProbe paths (no guided
 // batch) is bit-identical to the unguided one.
-// The spotlit room's uniform bake: 8,192 paths a probe exactly (a target never reached), no guide.
-BakeOptions spotlitUniform() {
-  BakeOptions off = quiet(kUnboundedBounces, 128, kContentDefault);
-  off.targetRelError = 1e-4;
-  off.maxSamplesPerProbe = 8192;
-  off.guide = false;
-  return off;
-}
-
 TEST(ProbeGuiding, UnbiasedLessNoisyAndDeterministic) {
-  const Scene s = spotlitRoom();
-  const SceneTracer tracer(s);
-  const std::vector<glm::dvec3> probes = spotlitProbes();
-  const BakeOptions off = spotlitUniform();
-  BakeOptions on = off;
+  const SpotlitBake room;
+  BakeOptions on = room.off;
   on.guide = true;
   BakeStats offStats, onStats;
-  const std::vector<ShRgb> a = bakeProbes(tracer, probes, off, &offStats);
-  const std::vector<ShRgb> b = bakeProbes(tracer, probes, on, &onStats);
+  const std::vector<ShRgb> a = bakeProbes(room.tracer, room.probes, room.off, &offStats);
+  const std::vector<ShRgb> b = bakeProbes(room.tracer, room.probes, on, &onStats);
   ASSERT_EQ(offStats.paths, onStats.paths);
   expectBakesAgree(a, offStats, b, onStats, 4.0);
   std::printf(
@@ -561,62 +564,59 @@ TEST(ProbeGuiding, UnbiasedLessNoisyAndDeterministic) {
 
   BakeOptions one = on;
   one.threads = 1;
-  const std::vector<ShRgb> single = bakeProbes(tracer, probes, one);
+  const std::vector<ShRgb> single = bakeProbes(room.tracer, room.probes, one);
   EXPECT_EQ(std::memcmp(single.data(), b.data(), b.size() * sizeof(ShRgb)), 0);
 
-  BakeOptions firstOnly = off;
+  BakeOptions firstOnly = room.off;
   firstOnly.maxSamplesPerProbe = firstOnly.samplesPerProbe;
   BakeOptions firstOnlyGuided = firstOnly;
   firstOnlyGuided.guide = true;
-  const std::vector<ShRgb> c = bakeProbes(tracer, probes, firstOnly);
-  const std::vector<ShRgb> d = bakeProbes(tracer, probes, firstOnlyGuided);
+  const std::vector<ShRgb> c = bakeProbes(room.tracer, room.probes, firstOnly);
+  const std::vector<ShRgb> d = bakeProbes(room.tracer, room.probes, firstOnlyGuided);
   EXPECT_EQ(std::memcmp(c.data(), d.data(), c.size() * sizeof(ShRgb)), 0);
 }
 
 // The direction guide goes on from pass to pass (ProbeBakeState::guide): on the spotlit room, every probe
-// stopped at 2,048 paths in pass 2 and then given the paths 8,192 a probe would have spent, shared by the path
-// budget's pass (budgetCoversCaps, over the states a shard hands on), is unbiased against the uniform bake (4 combined standard errors, as above), about
-// as converged as one pass of 8,192 (within 10 %; relearning the guide from scratch in the budget's pass loses
-// its first batches and the guide learned from the earlier ones) and bit-identical for 1 and 2 threads. The
+// stopped at 2,048 paths in pass 2 (pass2MaxSamples) and then given the paths 8,192 a probe would have spent,
+// shared by the path budget's pass over the states a shard hands on, is unbiased against the uniform bake (4
+// combined standard errors, as above), about as converged as one pass of 8,192 (within 10 %; relearning the
+// guide from scratch in the budget's pass loses its first batches and the guide learned from the earlier
+// ones) and bit-identical for 1 and 2 threads. The
 // states after pass 2 hold the guide: every batch after pass 1 recorded, light in some bin; shard and merge
 // give the bytes one call gives.
 TEST(ProbeGuiding, TheBudgetsPassGoesOnWithTheGuideEarlierPassesLearned) {
-  const Scene s = spotlitRoom();
-  const SceneTracer tracer(s);
-  const std::vector<glm::dvec3> probes = spotlitProbes();
-  const BakeOptions off = spotlitUniform();
-  BakeOptions onePass = off;
+  const SpotlitBake room;
+  BakeOptions onePass = room.off;
   onePass.guide = true;
   BakeOptions split = onePass;
   split.pass2MaxSamples = 2048;
-  split.pathBudget = kBakeBatchSize;  // the caps' spend (cappedSpend) is the budget
-  split.budgetCoversCaps = true;
+  split.pathBudget = kBakeBatchSize;  // the caps' spend (flatCapPaths) is the budget
   BakeStats offStats, oneStats, splitStats;
-  const std::vector<ShRgb> a = bakeProbes(tracer, probes, off, &offStats);
-  bakeProbes(tracer, probes, onePass, &oneStats);
+  const std::vector<ShRgb> a = bakeProbes(room.tracer, room.probes, room.off, &offStats);
+  bakeProbes(room.tracer, room.probes, onePass, &oneStats);
   const ShardBake states =
-      bakeProbesShard(tracer, probes, split, std::vector<uint8_t>(probes.size(), 1), nullptr);
-  ASSERT_EQ(states.states.size(), probes.size());
+      bakeProbesShard(room.tracer, room.probes, split, std::vector<uint8_t>(room.probes.size(), 1), nullptr);
+  ASSERT_EQ(states.states.size(), room.probes.size());
   for (const ProbeBakeState& st : states.states) {
     EXPECT_EQ(st.batches, 2048 / kBakeBatchSize);
     EXPECT_EQ(st.guideBatches, st.batches - 2);  // pass 1 (128 paths) learns nothing
     EXPECT_GT(*std::max_element(st.guide.begin(), st.guide.end()), 0.0f);
   }
-  const std::vector<ShRgb> b = bakeProbesMerged(tracer, probes, split, states, &splitStats);
+  const std::vector<ShRgb> b = bakeProbesMerged(room.tracer, room.probes, split, states, &splitStats);
   // The caps' spend, shared by the error (rounded down a batch a probe at most).
   ASSERT_LE(splitStats.paths, oneStats.paths);
-  ASSERT_GE(splitStats.paths + probes.size() * kBakeBatchSize, oneStats.paths);
+  ASSERT_GE(splitStats.paths + room.probes.size() * kBakeBatchSize, oneStats.paths);
   expectBakesAgree(a, offStats, b, splitStats, 4.0);
   std::printf(
       "spotlit room, 8,192 paths a probe: mean relative stderr %.4f one pass, %.4f in two (uniform %.4f)\n",
       oneStats.meanRelError, splitStats.meanRelError, offStats.meanRelError);
   EXPECT_LT(splitStats.meanRelError, 1.1 * oneStats.meanRelError);
 
-  const std::vector<ShRgb> whole = bakeProbes(tracer, probes, split);  // one call: the same bytes
+  const std::vector<ShRgb> whole = bakeProbes(room.tracer, room.probes, split);  // one call: the same bytes
   EXPECT_EQ(std::memcmp(whole.data(), b.data(), b.size() * sizeof(ShRgb)), 0);
   BakeOptions single = split;
   single.threads = 1;
-  const std::vector<ShRgb> one = bakeProbes(tracer, probes, single);
+  const std::vector<ShRgb> one = bakeProbes(room.tracer, room.probes, single);
   EXPECT_EQ(std::memcmp(one.data(), b.data(), b.size() * sizeof(ShRgb)), 0);
 }
 
@@ -735,7 +735,6 @@ TEST(LitPatches, TheHistogramGoesOnFromPassToPassWithOneMap) {
   BakeOptions split = onePass;
   split.pass2MaxSamples = 1024;
   split.pathBudget = kBakeBatchSize;
-  split.budgetCoversCaps = true;
   const std::vector<uint8_t> all(probes.size(), 1);
   const ShardBake states = bakeProbesShard(tracer, probes, split, all, nullptr);
   for (const ProbeBakeState& st : states.states) {

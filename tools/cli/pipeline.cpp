@@ -12,7 +12,6 @@
 #include <glm/geometric.hpp>
 
 #include "pipeline_options.h"
-#include "tetraprobe/bake/budget_shares.h"
 #include "tetraprobe/bake/sh_csv.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
@@ -158,11 +157,6 @@ double autoSpacing(const Scene& scene) {
 Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats& stats) {
   PipelineOptions options = given;
   if (!(options.spacing > 0.0)) options.spacing = autoSpacing(scene);
-  if (options.shareCaps && options.importShCsv.empty() && options.bake.targetRelError > 0.0 &&
-      options.bake.pathBudget > 0) {
-    options.bake.pass2MaxSamples = options.bake.maxSamplesPerProbe / 2;
-    options.bake.budgetCoversCaps = true;
-  }
   StageTimer timer(stats);
   // Progress lines for the stages that have none of their own (a log's heartbeat, common/progress.h);
   // emplace() ends the previous stage first.
@@ -184,22 +178,19 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   // their mean relative stderr was 0.09-0.21 against the first probes' 0.046.)
   const bool deferBudget =
       options.importShCsv.empty() && options.bake.targetRelError > 0.0 && options.bake.pathBudget > 0;
+  // --share-caps: pass 2 stops at half the cap and the budget's pass covers what the cap would have spent
+  // (and, once the probes are placed, one lit map for the whole bake: BakeOptions::litVoxel, below).
+  const bool shareCaps = options.shareCaps && deferBudget;
+  if (shareCaps) options.bake.pass2MaxSamples = options.bake.maxSamplesPerProbe / 2;
   std::vector<ProbeBakeState> bakeState;  // per probe; valid where hasBakeState
   std::vector<uint8_t> hasBakeState;
   double bakeFloor = 0.0;  // the first probes' floor (bakeErrorFloor), which the budget's pass measures by
   // Paths of the added probes' passes 1 and 2: outside the budget, as they were when the first call spent
   // it, so a level whose first probes used the whole budget traces as many paths as before, shared out
   // differently (one whose first probes left some gives it to the added ones).
-  // (With budgetCoversCaps their passes 2 stop short of the cap, so what counts is what they would have
-  // traced under it: flatCapPaths.)
+  // (With shareCaps their passes 2 stop short of the cap, so what counts is what they would have traced
+  // under it: flatCapPaths.)
   uint64_t addedPaths = 0;
-  auto flatCapPaths = [&](const ShardBake& r) {
-    std::vector<BudgetProbe> probes;
-    for (const ProbeBakeState& s : r.states) probes.push_back({s.batches, s.estimated, s.achieved});
-    const int cap = std::max({2, options.bake.maxSamplesPerProbe / kBakeBatchSize,
-                              (options.bake.samplesPerProbe + kBakeBatchSize - 1) / kBakeBatchSize});
-    return cappedSpend(probes, options.bake.targetRelError, cap) * uint64_t(kBakeBatchSize);
-  };
   auto keepStates = [&](const ShardBake& r, size_t first, size_t count) {
     bakeState.resize(first + count);
     hasBakeState.resize(first + count, 0);
@@ -404,7 +395,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stage.reset();  // the bake has progress of its own
     // With --share-caps, one lit map for every call of the bake, so the probes' lit-patch histograms carry
     // from pass to pass (BakeOptions::litVoxel).
-    if (options.shareCaps && deferBudget) options.bake.litVoxel = litMapVoxelEdge(probes, &skip);
+    if (shareCaps) options.bake.litVoxel = litMapVoxelEdge(probes, &skip);
     if (options.shardCount > 0) {
       const std::vector<uint8_t> own = shardOwnership(probes, options.shardIndex, options.shardCount);
       *options.shardOut =
@@ -514,7 +505,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stage.reset();  // the bake and occlusion have progress of their own
     std::vector<ShRgb> sh = deferBudget ? bakeDeferred(at, bake, more, nullptr, nullptr, states)
                                         : bakeProbes(tracer, at, bake, &more);
-    if (deferBudget) addedPaths += options.bake.budgetCoversCaps ? flatCapPaths(states) : more.paths;
+    if (deferBudget) addedPaths += shareCaps ? flatCapPaths(states, options.bake) : more.paths;
     stats.bake.intersectRays += more.intersectRays;
     stats.bake.occludedRays += more.occludedRays;
     stats.bake.paths += more.paths;

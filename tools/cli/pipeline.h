@@ -44,9 +44,9 @@ struct PipelineOptions {
   }();
   // With adaptive sampling and a path budget, true (the default): pass 2 stops each probe at half of
   // maxSamplesPerProbe, and the budget's pass, over the finished level, spends at least what the flat cap
-  // would have, shared by the error (BakeOptions::pass2MaxSamples, budgetCoversCaps), with one lit map for
-  // every call of the bake so that lit-patch histograms go on from pass to pass (BakeOptions::litVoxel); all
-  // set by buildLevel. false: the flat cap first, then the budget beyond it.
+  // would have, shared by the error (BakeOptions::pass2MaxSamples), with one lit map for every call of the
+  // bake so that lit-patch histograms go on from pass to pass (BakeOptions::litVoxel); both set by
+  // buildLevel. false: the flat cap first, then the budget beyond it.
   bool shareCaps = true;
   DeringOptions dering;  // auto; applied to baked and imported SH alike
 

@@ -44,15 +44,12 @@ struct BakeOptions {
   // arrives through a gap converges instead of stopping at the cap. The shares depend only on the probes'
   // states, never on threads.
   uint64_t pathBudget = 0;
-  // Adaptive sampling: pass 2 stops a probe at this many paths (0 = maxSamplesPerProbe; rounded down to
-  // batches, within [samplesPerProbe, maxSamplesPerProbe]), leaving the rest to the budget's pass.
+  // Adaptive sampling: > 0, pass 2 stops a probe at this many paths (rounded down to batches, within
+  // [samplesPerProbe, maxSamplesPerProbe]) and, with a path budget, the budget's pass spends at least what a
+  // flat cap of maxSamplesPerProbe would have (flatCapPaths), so a level whose probes stop at the cap traces
+  // about as many paths as with the flat cap, shared by the error: the probes that need fewer give paths to
+  // those that need more (the bake pipeline's --share-caps). 0: pass 2 goes to maxSamplesPerProbe.
   int pass2MaxSamples = 0;
-  // Adaptive sampling with a path budget: the budget's pass spends at least what a flat cap of
-  // maxSamplesPerProbe would have (budget_shares.h, cappedSpend: each traced probe's paths to the target as
-  // its error projects them, at most the cap), so a level whose probes stop at the cap traces about as many
-  // paths as with the flat cap, shared by the error. With pass2MaxSamples below the cap (the bake pipeline's
-  // --share-caps), the probes that need fewer give paths to those that need more.
-  bool budgetCoversCaps = false;
   // Lit-patch sampling: the lit map's voxel edge (0 = from the call's probes, litMapVoxelEdge). Given, every
   // call of a bake builds the same map, and a probe's lit-patch histogram goes on from pass to pass as its
   // direction guide does (ProbeBakeState::patches).
@@ -177,6 +174,10 @@ struct ShardBake {
   std::vector<uint32_t> probes;        // probe indices, increasing within one shard
   std::vector<ProbeBakeState> states;  // one per entry of `probes`
 };
+
+// The paths a flat cap of options.maxSamplesPerProbe would have traced on the probes of `states`: each its paths
+// to options.targetRelError as its error projects them, at most the cap (budget_shares.h, cappedSpend).
+uint64_t flatCapPaths(const ShardBake& states, const BakeOptions& options);
 
 // The probes of shard `index` of `count`: the probes sorted by (x, y, z, index) cut into `count` slabs of
 // equal counts (within one), slab `index` marked 1. Deterministic; every probe in exactly one shard.
