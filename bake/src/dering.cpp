@@ -1,5 +1,6 @@
-// Deringing of SH L2 probes: a per-probe Hann window over the bands, just strong enough that the
-// reconstructed irradiance is non-negative over the whole sphere. The minimum of E over the sphere is found
+// Deringing of SH L2 probes (kWindow, kFixed): a per-probe Hann window over the bands, just strong enough that
+// the reconstructed irradiance is non-negative over the whole sphere; kAuto's projection is in
+// dering_nearest.cpp, and this file's check decides which probes need it and verifies what it gives. The minimum of E over the sphere is found
 // by a dense check (a fixed spherical Fibonacci set of kDeringCheckNormals normals) followed by a compass
 // search in the tangent plane from the best sample; the strength by bisection on a 1/256 grid.
 // References: Sloan 2008 ("Stupid spherical harmonics (SH) tricks", section on windowing / ringing);
@@ -293,6 +294,7 @@ DeringStats deringProbes(std::vector<ShRgb>& sh, const DeringOptions& options) {
     throw InputError("dering: strength " + std::to_string(options.strength) + " must be in [0, 2]");
   struct PerProbe {
     double strength = 0.0;
+    bool changed = false;
     bool fixable = true;
     double lo[2] = {0.0, 0.0}, hi[2] = {0.0, 0.0};  // bounds on min E, [0] before and [1] after windowing
   };
@@ -313,12 +315,29 @@ DeringStats deringProbes(std::vector<ShRgb>& sh, const DeringOptions& options) {
         }
         const ProbeField field(sh[i]);
         field.bounds(0.0, p.lo[0], p.hi[0]);
-        if (options.mode == DeringMode::kAuto)
+        if (options.mode == DeringMode::kAuto) {
+          if (field.nonNegative(0.0)) {
+            p.lo[1] = p.lo[0];
+            p.hi[1] = p.hi[0];
+            return;
+          }
+          p.changed = nearestNonNegativeSh(sh[i], &p.fixable);
+          // The projection aims a tenth inside the tolerance; should the float coefficients still dip below
+          // it, the smallest window takes the rest.
+          if (p.fixable) {
+            const ProbeField projected(sh[i]);
+            p.strength = projected.nonNegative(0.0) ? 0.0 : autoStrength(projected, p.fixable);
+          }
+        } else if (options.mode == DeringMode::kWindow) {
           p.strength = autoStrength(field, p.fixable);
-        else if (options.mode == DeringMode::kFixed)
+        } else if (options.mode == DeringMode::kFixed) {
           p.strength = options.strength;
+        }
         if (p.strength > 0.0) {
           applyDeringWindow(sh[i], p.strength);
+          p.changed = true;
+        }
+        if (p.changed) {
           ProbeField(sh[i]).bounds(0.0, p.lo[1], p.hi[1]);  // of the stored (float) coefficients
         } else {
           p.lo[1] = p.lo[0];
@@ -345,7 +364,7 @@ DeringStats deringProbes(std::vector<ShRgb>& sh, const DeringOptions& options) {
   stats.probes = sh.size();
   double before = kInf, after = kInf;
   for (const PerProbe& p : per) {
-    if (p.strength > 0.0) ++stats.deringedProbes;
+    if (p.changed) ++stats.deringedProbes;
     if (!p.fixable) ++stats.unfixableProbes;
     stats.maxStrength = std::max(stats.maxStrength, p.strength);
     before = std::min(before, p.hi[0]);

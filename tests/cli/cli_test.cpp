@@ -198,9 +198,10 @@ TEST_F(Cli, HelpExitsZeroForEveryCommand) {
 
 // Bad usage is exit 2 with exactly one line on stderr.
 TEST_F(Cli, BadUsageExitsTwoWithOneLine) {
-  for (const char* a : {"", "frobnicate", "bake", "bake x.obj", "bake x.obj -o",
-                        "bake x.obj -o l.tpb --spacing abc", "bake x.obj -o l.tpb --no-such-flag",
-                        "bake x.obj -o l.tpb --share-caps maybe", "query", "render a b", "eval a"}) {
+  for (const char* a :
+       {"", "frobnicate", "bake", "bake x.obj", "bake x.obj -o", "bake x.obj -o l.tpb --spacing abc",
+        "bake x.obj -o l.tpb --no-such-flag", "bake x.obj -o l.tpb --share-caps maybe",
+        "bake x.obj -o l.tpb --dering windowed", "query", "render a b", "eval a"}) {
     const CliRun r = run(a);
     EXPECT_EQ(r.code, 2) << "'" << a << "': " << r.err;
     if (std::string(a).size() > 0) {

@@ -272,7 +272,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       std::printf("          by kind, mean / p95 (probes): %s\n", text.c_str());
     }
   }
-  std::printf("  sh      L%d, dering %s: %zu probes windowed, min irradiance %.4g -> %.4g W/m^2\n",
+  std::printf("  sh      L%d, dering %s: %zu probes changed, min irradiance %.4g -> %.4g W/m^2\n",
               opt.bake.shOrder, dering.c_str(), stats.dering.deringedProbes, stats.dering.minIrradianceBefore,
               stats.dering.minIrradianceAfter);
   if (opt.occlusion.mode != OcclusionMode::kNone)

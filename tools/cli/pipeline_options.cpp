@@ -113,9 +113,11 @@ std::vector<OptionSpec> bakeOptionSpecs() {
       {"--seed", "", "N",
        "random seed, an integer in [0, 2^64-1] (the output is a pure function of input, options and seed)",
        def("--seed")},
-      {"--dering", "", "none|auto|S",
-       "per-probe window on SH bands 1-2 so irradiance is never negative: auto = smallest strength per "
-       "probe, S = this strength in [0, 2] for all, none = keep the SH as projected",
+      {"--dering", "", "none|auto|window|S",
+       "make each probe's irradiance non-negative (SH L2 rings): auto = per channel the nearest "
+       "non-negative field with the same mean (the dark side stays dark), window = the smallest Hann "
+       "window on bands 1-2 per probe (lifts the dark side), S = this window strength in [0, 2] for all, "
+       "none = keep the SH as projected",
        def("--dering")},
       {"--sh-order", "", "1|2", "SH order of the probes (1: coefficients 4..8 zero)", def("--sh-order")},
       {"--import-sh", "", "FILE.csv",
@@ -250,11 +252,13 @@ PipelineOptions pipelineOptionsFromArgs(const Args& args) {
     opt.dering.mode = DeringMode::kNone;
   } else if (dering == "auto") {
     opt.dering.mode = DeringMode::kAuto;
+  } else if (dering == "window") {
+    opt.dering.mode = DeringMode::kWindow;
   } else {
     opt.dering.mode = DeringMode::kFixed;
     opt.dering.strength = parseNumber(dering, "--dering");
     if (!(opt.dering.strength >= 0.0 && opt.dering.strength <= kDeringMaxStrength))
-      throw UsageError("--dering must be none, auto or a strength in [0, 2], not '" + dering + "'");
+      throw UsageError("--dering must be none, auto, window or a strength in [0, 2], not '" + dering + "'");
   }
   opt.bake.bounces = args.bounces("--bounces");
   opt.bake.samplesPerProbe = args.integer("--samples");
@@ -381,9 +385,10 @@ std::vector<std::pair<std::string, std::string>> levelOptions(const PipelineOpti
                            " are neither default nor all");
   add("--content", o.bake.content == kContentAll ? "all" : "default");
   add("--seed", std::to_string(o.bake.seed));
-  add("--dering", o.dering.mode == DeringMode::kNone   ? "none"
-                  : o.dering.mode == DeringMode::kAuto ? "auto"
-                                                       : exactNumber(o.dering.strength));
+  add("--dering", o.dering.mode == DeringMode::kNone     ? "none"
+                  : o.dering.mode == DeringMode::kAuto   ? "auto"
+                  : o.dering.mode == DeringMode::kWindow ? "window"
+                                                         : exactNumber(o.dering.strength));
   add("--sh-order", std::to_string(o.bake.shOrder));
   if (!o.importShCsv.empty()) add("--import-sh", fileName(o.importShCsv));
   add("--occlusion", occlusionModeName(o.occlusion.mode));

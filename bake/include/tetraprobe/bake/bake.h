@@ -315,11 +315,17 @@ size_t dilateInvalidProbes(const std::vector<glm::dvec3>& positions, const std::
 // a Hann window whose half-width shrinks from infinity (s = 0: no change) to 2 bands (s = 1: w_1 = 1/2,
 // w_2 = 0, the cosine-convolved kernel (1 + cos)/4 >= 0, so any non-negative radiance gives non-negative E)
 // and then to 1 band (s = 2: only L00 left).
+// The window lifts E everywhere it shrinks a band: where a probe sees a bright region on one side and nothing
+// on the other, its dark side gets a share of the bright side's light (a probe in the Cornell box's open front,
+// facing out: 0 W/m^2 traced, -0.018 as projected, 0.108 windowed). kAuto instead takes, per channel, the
+// nearest field (L2 over the sphere) that is non-negative with the same mean (nearestNonNegativeSh), which
+// leaves the dark side near zero and the bright side nearly as projected.
 
 enum class DeringMode {
-  kNone,   // leave the SH bit-identical
-  kAuto,   // per probe, the smallest strength (on a 1/256 grid) that makes E non-negative
-  kFixed,  // one strength for every probe
+  kNone,    // leave the SH bit-identical
+  kAuto,    // per probe and channel, the nearest non-negative irradiance with L00 held (nearestNonNegativeSh)
+  kWindow,  // per probe, the smallest window strength (on a 1/256 grid) that makes E non-negative
+  kFixed,   // one window strength for every probe
 };
 
 struct DeringOptions {
@@ -330,9 +336,11 @@ struct DeringOptions {
 
 struct DeringStats {
   size_t probes = 0;
-  size_t deringedProbes = 0;         // probes whose SH the window changed (strength > 0)
-  size_t unfixableProbes = 0;        // kAuto: negative even at strength 2 (a negative L00; only imported SH)
-  double maxStrength = 0.0;          // largest strength applied
+  size_t deringedProbes = 0;         // probes whose SH the deringing changed
+  size_t unfixableProbes = 0;        // negative even at strength 2 / with bands 1-2 gone (a negative L00;
+                                     // only imported SH)
+  double maxStrength = 0.0;          // largest window strength applied (kAuto: only where float rounding left
+                                     // the projection below the tolerance)
   float minIrradianceBefore = 0.0f;  // min over probes, normals and channels of E, W/m^2 (0 with no probes)
   float minIrradianceAfter = 0.0f;
 };
@@ -363,7 +371,16 @@ void applyDeringWindow(ShRgb& sh, double strength);
 // changed), W/m^2: dense check plus local refinement (kDeringCheckNormals).
 float minShIrradiance(const ShRgb& sh, double strength = 0.0);
 
-// kAuto's choice for one probe: 0 when E >= -tolerance already; else the smallest multiple s of
+// kAuto for one probe: per channel whose E dips below -kDeringTolerance / 10 x the probe's largest mean
+// irradiance, bands 1-2 replaced by those of the nearest field in the L2 norm over the sphere (with L00 held,
+// the Euclidean distance of the coefficients A_l L_lm, Parseval) whose E is at least that bound at every normal
+// (the dense check set and a compass search from its lowest sample: the window's check). A probe without band
+// 2 (all nine of its band-2 coefficients zero) keeps none. Channels already non-negative keep every bit; a
+// channel with a non-positive mean gets its constant (`fixable` false). Returns whether it changed sh.
+// Never farther from the input than the smallest window (the window is one member of the same set).
+bool nearestNonNegativeSh(ShRgb& sh, bool* fixable = nullptr);
+
+// kWindow's choice for one probe: 0 when E >= -tolerance already; else the smallest multiple s of
 // 1/kDeringStepsPerUnit such that windowed E >= -tolerance, found by bisection so that s - 1/256 is verified
 // to fail; kDeringMaxStrength when even that fails (`fixable` set to false).
 double autoDeringStrength(const ShRgb& sh, bool* fixable = nullptr);
