@@ -744,7 +744,10 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
   // points; probes in front of the worst, up to the budget; the error measured again on an independent draw.
   // auto: a quarter of the placed probes (shell probes not counted), at least kAutoRefineMin: a small level's
   // rooms hold few probes at the default spacing, and that is where 1 m probes resolve the light worst.
-  constexpr int kAutoRefineMin = 256;
+  // 1024: enough that on every level measured the refinement stops at the points over its error threshold
+  // (its proposals run out) rather than at the count; at 256 the Cornell box and two_rooms stopped at the count
+  // (docs/accuracy.md#error-driven-refinement).
+  constexpr int kAutoRefineMin = 1024;
   const int budget = options.probeBudget >= 0
                          ? options.probeBudget
                          : std::max(kAutoRefineMin, int(0.25 * double(probes.size() - shell.size())));

@@ -83,7 +83,7 @@ struct PipelineOptions {
   int lookupHoleRounds = 2;
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
   // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 =
-  // auto: a quarter of the probes that are not shell probes, at least 256. With user probes alone
+  // auto: a quarter of the probes that are not shell probes, at least 1024. With user probes alone
   // (placement "none") the CLI makes it 0 unless given (pipeline_options.h).
   int probeBudget = -1;
   // Surface points refinement measures at (each twice: select, check); < 0 = auto (autoRefinePoints).

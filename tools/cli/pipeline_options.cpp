@@ -147,7 +147,7 @@ std::vector<OptionSpec> bakeOptionSpecs() {
       {"--probe-budget", "", "N|auto",
        "error-driven refinement: at most N probes added in front of the surface points where the lookup's "
        "error against the path-traced oracle is largest (only where it exceeds 7 %); auto = a quarter of "
-       "the placed probes (shell probes not counted), at least 256; 0 = none (the default with --probes "
+       "the placed probes (shell probes not counted), at least 1024; 0 = none (the default with --probes "
        "alone)",
        def("--probe-budget")},
       {"--refine-points", "", "N|auto",
