@@ -1,8 +1,9 @@
 // Deringing of SH L2 probes (kWindow, kFixed): a per-probe Hann window over the bands, just strong enough that
 // the reconstructed irradiance is non-negative over the whole sphere; kAuto's projection is in
-// dering_nearest.cpp, and this file's check decides which probes need it and verifies what it gives. The minimum of E over the sphere is found
-// by a dense check (a fixed spherical Fibonacci set of kDeringCheckNormals normals) followed by a compass
-// search in the tangent plane from the best sample; the strength by bisection on a 1/256 grid.
+// dering_nearest.cpp, and this file's check decides which probes need it and verifies what it gives. The
+// minimum of E over the sphere is found by a dense check (a fixed spherical Fibonacci set of
+// kDeringCheckNormals normals) followed by a compass search in the tangent plane from the best sample; the
+// strength by bisection on a 1/256 grid.
 // References: Sloan 2008 ("Stupid spherical harmonics (SH) tricks", section on windowing / ringing);
 // Ramamoorthi & Hanrahan 2001 (the A_l cosine-lobe factors); Marques et al. 2013 (spherical Fibonacci
 // point sets); Kolda, Lewis & Torczon 2003 ("Optimization by direct search", compass search).
@@ -324,9 +325,11 @@ DeringStats deringProbes(std::vector<ShRgb>& sh, const DeringOptions& options) {
           p.changed = nearestNonNegativeSh(sh[i], &p.fixable);
           // The projection aims a tenth inside the tolerance; should the float coefficients still dip below
           // it, the smallest window takes the rest.
-          if (p.fixable) {
-            const ProbeField projected(sh[i]);
-            p.strength = projected.nonNegative(0.0) ? 0.0 : autoStrength(projected, p.fixable);
+          const ProbeField projected(sh[i]);
+          if (p.fixable && !projected.nonNegative(0.0)) p.strength = autoStrength(projected, p.fixable);
+          if (p.strength == 0.0) {
+            projected.bounds(0.0, p.lo[1], p.hi[1]);  // of the stored (float) coefficients
+            return;
           }
         } else if (options.mode == DeringMode::kWindow) {
           p.strength = autoStrength(field, p.fixable);

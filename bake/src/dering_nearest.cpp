@@ -189,14 +189,16 @@ bool solveSmall(std::vector<double> m, std::vector<double> b, size_t n, std::vec
   return true;
 }
 
-constexpr int kMaxAdded = 200;  // constraints added (sphere minima) before giving up to the caller's window
+constexpr int kMaxAdded =
+    200;  // constraints added (sphere minima) before leaving the rest to the caller's window
 
 // One channel: x (e_1 .. e_{dims-1}) moved to the nearest point with E >= -slack everywhere, by the dual
 // active-set method of Goldfarb & Idnani (1983) for the Hessian I: from the unconstrained optimum x0, the
 // sphere's minimum direction is added as a constraint while E is below -slack there, each time stepping along
 // the part of its normal the active normals do not span and dropping an active constraint whose multiplier
-// would turn negative. False when it stopped first (the caller's check then windows what is left).
-bool projectChannel(double b0, Row& x, int dims, double slack) {
+// would turn negative. Should it stop first (kMaxAdded, nearly dependent normals), deringProbes' check of the
+// result windows what is left.
+void projectChannel(double b0, Row& x, int dims, double slack) {
   std::vector<Row> active;
   std::vector<double> mu;
   const size_t n = size_t(dims - 1);
@@ -204,7 +206,7 @@ bool projectChannel(double b0, Row& x, int dims, double slack) {
     // The next constraint: where E is least.
     glm::dvec3 at;
     double s = sphereMinimum(b0, x, dims, at);
-    if (s >= -slack) return true;
+    if (s >= -slack) return;
     const Row a = rowAt(at, dims);
     double muNew = 0.0;
     for (int step = 0; step < 2 * int(n) + 2; ++step) {
@@ -218,7 +220,7 @@ bool projectChannel(double b0, Row& x, int dims, double slack) {
           rhs[i] = dot(active[i], a, dims);
           for (size_t j = 0; j < k; ++j) g[i * k + j] = dot(active[i], active[j], dims);
         }
-        if (!solveSmall(g, rhs, k, r)) return false;
+        if (!solveSmall(g, rhs, k, r)) return;
         for (size_t i = 0; i < k; ++i)
           for (size_t c = 0; c < n; ++c) z[c] -= r[i] * active[i][c];
       }
@@ -232,7 +234,7 @@ bool projectChannel(double b0, Row& x, int dims, double slack) {
           drop = i;
         }
       const double t = std::min(full, partial);
-      if (!std::isfinite(t)) return false;
+      if (!std::isfinite(t)) return;
       for (size_t c = 0; c < n; ++c) x[c] += t * z[c];
       for (size_t i = 0; i < k; ++i) mu[i] -= t * r[i];
       muNew += t;
@@ -246,8 +248,6 @@ bool projectChannel(double b0, Row& x, int dims, double slack) {
       mu.erase(mu.begin() + std::ptrdiff_t(drop));
     }
   }
-  glm::dvec3 at;
-  return sphereMinimum(b0, x, dims, at) >= -slack;
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -22,6 +23,21 @@ ShRgb deltaSh(glm::vec3 dir, glm::vec3 irradiance) {
   ShRgb sh;
   addDeltaToSh(sh, glm::normalize(dir), irradiance);
   return sh;
+}
+
+// 40 ringing fields: a bright delta from a random direction, a second source and ambient light (fields whose
+// window strength is not a round number), drawn from a fixed seed.
+std::vector<ShRgb> ringingFields() {
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<ShRgb> fields;
+  for (int k = 0; k < 40; ++k) {
+    ShRgb sh = deltaSh({u(gen), u(gen), u(gen)}, glm::vec3(1e6f, 8e5f, 6e5f));
+    addDeltaToSh(sh, glm::normalize(glm::vec3(u(gen), u(gen), u(gen))), glm::vec3(3e5f * (1 + u(gen))));
+    sh.c[0] += glm::vec3(2e4f * (1 + u(gen)));  // ambient
+    fields.push_back(sh);
+  }
+  return fields;
 }
 
 double maxMean(const ShRgb& sh) {
@@ -75,13 +91,8 @@ TEST(Dering, BrightDeltaBecomesNonNegativeAndKeepsL00) {
 // Smallest on the grid: strength s passes and s - 1/256 leaves a negative, for deltas mixed with ambient
 // light and a second source (fields whose strength is not a round number).
 TEST(Dering, AutoStrengthIsTheSmallestThatWorks) {
-  std::mt19937 gen(3);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   int checked = 0;
-  for (int k = 0; k < 40; ++k) {
-    ShRgb sh = deltaSh({u(gen), u(gen), u(gen)}, glm::vec3(1e6f, 8e5f, 6e5f));
-    addDeltaToSh(sh, glm::normalize(glm::vec3(u(gen), u(gen), u(gen))), glm::vec3(3e5f * (1 + u(gen))));
-    sh.c[0] += glm::vec3(2e4f * (1 + u(gen)));  // ambient
+  for (const ShRgb& sh : ringingFields()) {
     bool fixable = false;
     const double s = autoDeringStrength(sh, &fixable);
     EXPECT_TRUE(fixable);
@@ -214,13 +225,10 @@ double distance2(const ShRgb& a, const ShRgb& b) {
 // constant) the variational inequality (x - x0) . (w - x) >= 0 holds per channel, which no other feasible
 // point of a convex set satisfies.
 TEST(Dering, NearestIsNonNegativeKeepsL00AndIsTheProjection) {
-  std::mt19937 gen(3);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const std::vector<ShRgb> fields = ringingFields();
   int changed = 0;
-  for (int k = 0; k < 40; ++k) {
-    ShRgb in = deltaSh({u(gen), u(gen), u(gen)}, glm::vec3(1e6f, 8e5f, 6e5f));
-    addDeltaToSh(in, glm::normalize(glm::vec3(u(gen), u(gen), u(gen))), glm::vec3(3e5f * (1 + u(gen))));
-    in.c[0] += glm::vec3(2e4f * (1 + u(gen)));
+  for (size_t k = 0; k < fields.size(); ++k) {
+    const ShRgb& in = fields[k];
     ShRgb x = in;
     bool fixable = false;
     if (!nearestNonNegativeSh(x, &fixable)) continue;

@@ -374,7 +374,7 @@ float minShIrradiance(const ShRgb& sh, double strength = 0.0);
 // kAuto for one probe: per channel whose E dips below -kDeringTolerance / 10 x the probe's largest mean
 // irradiance, bands 1-2 replaced by those of the nearest field in the L2 norm over the sphere (with L00 held,
 // the Euclidean distance of the coefficients A_l L_lm, Parseval) whose E is at least that bound at every normal
-// (the dense check set and a compass search from its lowest sample: the window's check). A probe without band
+// (E's exact minimum over the sphere, bake/src/dering_nearest.cpp). A probe without band
 // 2 (all nine of its band-2 coefficients zero) keeps none. Channels already non-negative keep every bit; a
 // channel with a non-positive mean gets its constant (`fixable` false). Returns whether it changed sh.
 // Never farther from the input than the smallest window (the window is one member of the same set).
