@@ -1,6 +1,6 @@
 // Random surface points for the evaluation: area-weighted triangle choice, uniform point in the triangle,
 // and the side that faces open space, found by a small back-face ray test on each side (the Unity APV 25 %
-// rule applied to a hemisphere). Points enclosed on both sides, and points in alpha-cutout holes, are redrawn,
+// rule applied to a hemisphere; rays into the void below the level count as closed). Points enclosed on both sides, and points in alpha-cutout holes, are redrawn,
 // within a bounded number of draws. The side test counts only opaque surfaces (a glass pane encloses
 // nothing).
 // References: Osada et al. 2002 ("Shape distributions", uniform triangle sampling); Unity APV docs.
@@ -23,11 +23,21 @@ namespace {
 constexpr int kSideRays = 32;
 constexpr double kSideBackFaceFraction = 0.25;
 constexpr int kMaxDrawsPerPoint = 20;
+// Under a sky, an escaping ray counts as closed when it leaves below the horizon (direction y < 0): there is
+// no ground below it to stand on. Rays that pass the edge of a finite ground at a grazing angle escape too,
+// so an overhang within about three heights of that edge may be judged outside (as under a black sky). A
+// threshold of 30 degrees below the horizon keeps such overhangs, but it keeps more of a level's outside too:
+// q3 dm4ish baked with it was no better than before at area points, baked with this one a sixth better
+// (docs/evaluation.md#surface-points-and-the-void-below-a-level).
+constexpr float kVoidBelowY = 0.0f;
 
 // True when at most 25 % of kSideRays hemisphere rays from `origin` about `n` meet back faces. Under a black
 // sky an escaping ray counts as closed too: the level is then an interior and a side that sees the void is
 // its outside (the exterior face of a single-sided wall, a slab face coplanar with the ceiling), where no
-// viewer stands and the reference is zero.
+// viewer stands and the reference is zero. Under any sky a ray that escapes below the horizon (kVoidBelowY)
+// does too: the void under a level is its outside (the underside of a ground plane, which sees the sky below
+// the horizon and is bright in the reference, and the outer walls of a level standing in the void, which
+// no viewer on its ground ever sees).
 bool sideIsOpen(const SceneTracer& tracer, const glm::vec3& origin, const glm::vec3& n, bool blackSky,
                 Rng& rng) {
   int back = 0;
@@ -36,7 +46,7 @@ bool sideIsOpen(const SceneTracer& tracer, const glm::vec3& origin, const glm::v
     const float u1 = (float(k) + rng.uniform()) / float(kSideRays), u2 = rng.uniform();
     const glm::vec3 d = uniformHemisphere(n, u1, u2);
     const Hit hit = tracer.intersect(origin, d, 0.0f, std::numeric_limits<float>::infinity(), 0.0f);
-    if ((hit.hit && !hit.frontFace) || (!hit.hit && blackSky)) ++back;
+    if ((hit.hit && !hit.frontFace) || (!hit.hit && (blackSky || d.y < kVoidBelowY))) ++back;
   }
   return double(back) <= kSideBackFaceFraction * kSideRays;
 }

@@ -184,5 +184,50 @@ TEST(SurfacePoints, PickTheOpenSideAndSkipEnclosedSurfaces) {
   EXPECT_GT(lidPoints, 0);
 }
 
+// Under a sky, the void below a level is its outside: the underside of a ground plane (single-sided, facing
+// +Y) sees the sky below the horizon and would be "open" by back faces alone, yet no viewer on the ground
+// sees it, so no point is drawn there; its top is. Two roofs 3 m up: one facing down, whose downward rays
+// meet the ground's front face (open: a viewer under the eaves sees it), one facing up, whose top is open
+// under a sky and sees the void under a black one (then its underside is taken). The ground reaches 30 m
+// past the roofs, so few of their grazing rays pass its edge.
+TEST(SurfacePoints, UndersideOfAGroundPlaneUnderASkyIsNeverDrawn) {
+  for (const bool sky : {true, false}) {
+    Scene s;
+    const uint32_t ground = test::addMaterial(s, glm::vec3(0.5f));
+    const uint32_t down = test::addMaterial(s, glm::vec3(0.3f));
+    const uint32_t up = test::addMaterial(s, glm::vec3(0.4f));
+    test::addGround(s, 0.0f, 40.0f, ground);
+    test::addQuad(s, {-10, 3, -3}, {-4, 3, -3}, {-4, 3, 3}, {-10, 3, 3}, down);  // faces -Y
+    test::addQuad(s, {4, 3, 3}, {10, 3, 3}, {10, 3, -3}, {4, 3, -3}, up);        // faces +Y
+    if (sky) s.skyRadiance = glm::vec3(1.0f);
+    SceneTracer tracer(s);
+    const std::vector<SurfacePoint> pts = sampleSurfacePoints(tracer, 4000, 5);
+    int groundPoints = 0, downPoints = 0, upPoints = 0;
+    for (const SurfacePoint& p : pts) {
+      const uint32_t m = s.triangleMaterial[p.triangle];
+      if (m == ground) {
+        ++groundPoints;
+        EXPECT_GT(p.normal.y, 0.99f) << "a ground point is on its top, never its underside; sky " << sky
+                                     << " at " << p.position.x << " " << p.position.z;
+      } else if (m == down) {
+        ++downPoints;
+        EXPECT_LT(p.normal.y, -0.99f) << "the down-facing roof is seen from the ground; sky " << sky;
+      } else {
+        ++upPoints;
+        EXPECT_NEAR(p.normal.y, sky ? 1.0f : -1.0f, 1e-5f)
+            << "the up-facing roof's top is open under a sky only; sky " << sky;
+      }
+    }
+    EXPECT_GT(downPoints, 0);
+    EXPECT_GT(upPoints, 0);
+    if (sky) {
+      EXPECT_EQ(pts.size(), 4000u);
+      EXPECT_GT(groundPoints, 3500) << "the ground's top is most of the open area";
+    } else {
+      // Under a black sky the ground sees the void from both sides: the roofs' undersides are all there is.
+      EXPECT_EQ(groundPoints, 0);
+    }
+  }
+}
 }  // namespace
 }  // namespace tetraprobe

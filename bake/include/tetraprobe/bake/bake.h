@@ -287,8 +287,11 @@ std::vector<SurfacePoint> sampleCameraPoints(const SceneTracer& tracer, const st
 // (points whose both sides are enclosed are skipped and redrawn). Deterministic for a given seed.
 // Points in alpha-cutout holes are redrawn (there is no surface there); the side test counts opaque
 // surfaces only. A side is open when at most 25 % of 32 uniform-hemisphere rays from the point (offset by
-// tracer.rayEpsilon() along that side's normal) hit back faces -- or, when the sky is black, hit back faces
-// or escape (the level is an interior and the void is its outside); the front side wins when both are open.
+// tracer.rayEpsilon() along that side's normal) hit back faces or escape into the void: when the sky is
+// black, any escaping ray (the level is an interior and the void is its outside); under a sky, a ray escaping
+// below the horizon (direction y < 0: the underside of a ground plane, or a wall facing the void around a
+// level, which no viewer on the ground sees).
+// The front side wins when both are open.
 // At most 20 x count draws: may return fewer than `count` points when most surface is enclosed.
 std::vector<SurfacePoint> sampleSurfacePoints(const SceneTracer& tracer, int count, uint64_t seed);
 
