@@ -159,12 +159,12 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
   rel.reserve(open);
   double se = 0.0, seAbs = 0.0, leak = 0.0, leakIndirect = 0.0;
   glm::dvec3 closedSum(0.0);
-  size_t indirect = 0, gross = 0, dark = 0, fallback = 0;
+  size_t indirect = 0, gross = 0, dark = 0, fallback = 0, closedFallback = 0;
   for (size_t i = 0; i < n; ++i) {
     const glm::vec3 x = m.values[i], r = report.points[i].reference.irradiance;
     if (method.fallback &&
         method.fallback(report.points[i].surface.position, report.points[i].surface.normal) > 0.0f)
-      ++fallback;
+      ++(noPathLeaves(report.points[i]) ? closedFallback : fallback);
     double e = 0.0, eAbs = 0.0, sq = 0.0;
     for (int c = 0; c < 3; ++c) {
       const double d = double(x[c]) - double(r[c]), rc = double(r[c]);
@@ -198,7 +198,10 @@ void scoreMethod(EvalReport& report, const LookupMethod& method) {
     return v[std::min(v.size() - 1, size_t(std::ceil(p * double(v.size()))) - 1)];
   };
   if (indirect > 0) m.leakIndirect = leakIndirect / double(indirect);
-  if (method.fallback && n > 0) m.fallback = double(fallback) / double(n);
+  if (method.fallback) {
+    m.fallback = open > 0 ? double(fallback) / double(open) : 0.0;
+    m.closedFallbackPoints = closedFallback;
+  }
   if (n > open) m.closedMean = glm::vec3(closedSum / double(n - open));
   if (open > 0) {
     m.relmse = se / double(3 * open);

@@ -150,6 +150,7 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
     // The tet's own data decides a hole; the lookup's answer (after the face blend) is counted apart.
     query.explain(sp.position, sp.normal, record);
     out.lookupFallbackPoints += record.fallback > 0.0f;
+    if (options.keepLookupFallbacks && record.fallback > 0.0f) out.lookupFallbacks.push_back(sp);
     if (!((options.lookupOnly ? record.fallback : record.ownFallback) > 0.0f)) continue;
     ++out.holePoints;
     if (options.onlyUnseen && fallbackProbeSeen(tracer, level, record, sp.position, sp.normal)) {

@@ -938,8 +938,9 @@ namespace {
 
 // Two sealed rooms split by a 0.1 m wall at x = 0: a bright ceiling panel on the left (x < 0), a dim one on
 // the right, and on the right a free-standing panel at x = 1.5 (|z| < 1) in front of the wall. Faces point
-// into the rooms; every box is closed.
-std::string wallSceneObj() {
+// into the rooms; every box is closed. `safe`: also a sealed 1 m box on the left room's floor whose faces
+// point into it, so that no light reaches its inside (a closed cavity: no path leaves).
+std::string wallSceneObj(bool safe = false) {
   std::ostringstream o;
   int base = 0;
   // A box [lo, hi] with faces pointing out of it (solid) or into it (room).
@@ -966,10 +967,43 @@ std::string wallSceneObj() {
   box(1.5, 0, -1, 1.55, 4, 1, "white", false);     // the panel in front of the wall, right side
   box(-3, 3.9, -1, -2, 3.95, 1, "bright", false);  // left light (its underside glows)
   box(2, 3.9, -1, 3, 3.95, 1, "dim", false);       // right light
+  if (safe) box(-3, 0.5, 2, -2, 1.5, 3, "white", true);  // the sealed box, its faces inward
   return o.str();
 }
 
 }  // namespace
+
+// The bake's final check counts apart the fallback points no path leaves: inside a sealed box (faces inward,
+// no light inside) every point falls back, as its tet's probes are all outside, and 4,096 reference paths find
+// no light there; the report's final_closed_fallback_points holds them and final_lookup_fallback_points the
+// others. The same level without the box has no such point.
+TEST_F(Cli, BakeCountsFallbackPointsNoPathLeavesApart) {
+  write("wall.mtl",
+        "newmtl white\nKd 0.7 0.7 0.7\nnewmtl bright\nKd 0 0 0\nKe 200 200 200\nnewmtl dim\nKd 0 0 0\nKe 5 5 "
+        "5\n");
+  std::ostringstream probes;
+  for (double x : {-3.5, -0.6, 0.6, 3.5})
+    for (double y : {0.25, 3.75})
+      for (double z : {-3.5, 3.5}) probes << x << "," << y << "," << z << "\n";
+  write("probes.csv", probes.str());
+  int64_t closed[2] = {0, 0}, open[2] = {0, 0};
+  for (const bool safe : {false, true}) {
+    write("wall.obj", wallSceneObj(safe));
+    const std::string report = path(safe ? "safe.json" : "nosafe.json").string();
+    const CliRun bake = run("bake " + path("wall.obj").string() + " --placement none --probes " +
+                            path("probes.csv").string() +
+                            " --samples 64 --noise 0 --fill-holes 0 --probe-budget 0 --fit off --threads 2 -o " +
+                            path("l.tpb").string() + " --report " + report);
+    ASSERT_EQ(bake.code, 0) << bake.err;
+    EXPECT_NE(bake.out.find("where no path leaves"), std::string::npos) << bake.out;
+    const auto holes = nlohmann::json::parse(slurp(report)).at("holes");
+    closed[safe] = holes.at("final_closed_fallback_points").get<int64_t>();
+    open[safe] = holes.at("final_lookup_fallback_points").get<int64_t>();
+  }
+  EXPECT_EQ(closed[0], 0) << "no cavity, nothing closed";
+  EXPECT_GT(closed[1], 20) << "the sealed box's inside: about 6 m^2 of some 300 m^2 of checked surface";
+  EXPECT_LE(open[1], open[0] + 20) << "its points are not counted as open fallbacks";
+}
 
 // A point that sees none of its probes: the point on the wall's right face at (0.05, 2, 0) lies in a tet of
 // three left-room probes and one right-room probe hidden behind the panel, so it sees none of its four probes.

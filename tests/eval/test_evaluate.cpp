@@ -172,6 +172,25 @@ TEST(ScoreMethod, PointNoPathLeavesIsReportedApart) {
   EXPECT_GT(m.meanRelAbsFloor, 50.0 * m.meanRelError);
 }
 
+// The fallback share counts the open points, like every other per-point measure: of four open points one
+// falls back (1/4), and the two closed points that fall back are counted apart (no viewer sees them), so a
+// level's sealed cavities do not decide its figure.
+TEST(ScoreMethod, FallbackShareIsOverTheOpenPointsWithClosedOnesApart) {
+  EvalReport report = handBuiltReport();
+  for (double x : {4.0, 5.0, 6.0}) {
+    EvalPoint closed;  // reference exactly 0: no path leaves
+    closed.surface.position = glm::dvec3(x, 0.0, 0.0);
+    closed.surface.normal = glm::vec3(0, 1, 0);
+    report.points.push_back(closed);
+  }
+  LookupMethod m = methodOf(report, [](glm::vec3 r) { return r; });
+  m.fallback = [](const glm::dvec3& p, const glm::vec3&) { return p.x == 2.0 || p.x >= 5.0 ? 0.5f : 0.0f; };
+  scoreMethod(report, m);
+  EXPECT_EQ(report.closedPoints, 3u);
+  EXPECT_EQ(report.methods.back().fallback, 0.25);
+  EXPECT_EQ(report.methods.back().closedFallbackPoints, 2u);
+}
+
 // leak_indirect averages over the points lit only indirectly, and only those.
 TEST(ScoreMethod, LeakIndirectCountsOnlyIndirectPoints) {
   EvalReport report = handBuiltReport();

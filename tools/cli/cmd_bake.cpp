@@ -315,13 +315,15 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                   r.checked, r.added);
     std::printf("\n");
   }
-  if (stats.finalChecked > 0)
+  if (stats.finalChecked > 0) {
+    const size_t open = stats.finalLookupFallbacks - stats.finalClosedFallbacks;
     std::printf(
         "  fallback %zu of %zu surface points (%.1f %%) see none of their tet's probes in the finished "
-        "level by its data; %zu (%.1f %%) after the face blend with the tets around them (the lookup's "
-        "answer)\n",
+        "level by its data; %zu (%.2f %%) after the blend with the tets around them (the lookup's answer), "
+        "%zu more where no path leaves (closed: %d paths found no light)\n",
         stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked),
-        stats.finalLookupFallbacks, 100.0 * double(stats.finalLookupFallbacks) / double(stats.finalChecked));
+        open, 100.0 * double(open) / double(stats.finalChecked), stats.finalClosedFallbacks, kClosedTestPaths);
+  }
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);
   std::printf(
@@ -457,7 +459,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
                   {"probes_added", stats.holeProbes},
                   {"final_points_checked", stats.finalChecked},
                   {"final_hole_points", stats.finalHoles},
-                  {"final_lookup_fallback_points", stats.finalLookupFallbacks}};
+                  {"final_lookup_fallback_points", stats.finalLookupFallbacks - stats.finalClosedFallbacks},
+                  {"final_closed_fallback_points", stats.finalClosedFallbacks}};
     j["refine"] = {{"probes_added", stats.refineProbes},
                    {"points", stats.refineBefore.points},
                    {"mean_log2_error_before", stats.refineBefore.meanLogError},

@@ -264,6 +264,7 @@ nlohmann::json methodJson(const MethodResult& m, const std::string& coherentOrde
                       {"bytes_per_probe_sections", perProbe}};
   j["gpu_ms"] = m.gpuMs >= 0.0 ? nlohmann::json(m.gpuMs) : nlohmann::json(nullptr);
   j["fallback"] = m.fallback >= 0.0 ? nlohmann::json(m.fallback) : nlohmann::json(nullptr);
+  if (m.fallback >= 0.0) j["fallback_closed_points"] = m.closedFallbackPoints;
   return j;
 }
 
@@ -599,6 +600,10 @@ int cmdEval(int argc, char** argv) {
       for (const auto& m : report.methods)
         std::printf(" %s %.4g", m.name.c_str(), luminance(glm::dvec3(m.closedMean)));
       std::printf(" W/m^2\n");
+      for (const auto& m : report.methods)
+        if (m.fallback >= 0.0 && m.closedFallbackPoints > 0)
+          std::printf("  %s falls back at %zu of them (not in its fallback share, which counts open points)\n",
+                      m.name.c_str(), m.closedFallbackPoints);
     }
   }
 

@@ -852,11 +852,23 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ho.spacing = options.spacing;
     ho.seed = options.bake.seed ^ 0xf1a1ull;
     ho.propose = false;
+    ho.keepLookupFallbacks = true;
     stage.emplace("check", 0, "", show);
     const OcclusionHoles left = findOcclusionHoles(tracer, level, ho);
     stats.finalChecked = left.pointsChecked;
     stats.finalHoles = left.holePoints;
     stats.finalLookupFallbacks = left.lookupFallbackPoints;
+    // Points no path leaves (a closed cavity: eval's noPathLeaves, evaluate.h) are counted apart: no viewer
+    // sees their answer. A point is one when kClosedTestPaths reference paths (eval's default count) find
+    // no light at all.
+    std::vector<uint8_t> closed(left.lookupFallbacks.size(), 0);
+    parallelFor(closed.size(), options.bake.threads, [&](size_t i) {
+      const SurfacePoint& sp = left.lookupFallbacks[i];
+      const ReferenceIrradiance r = referenceIrradiance(tracer, sp.position, sp.normal, kClosedTestPaths,
+                                                        options.bake.seed ^ (0xc105edull + i), options.bake);
+      closed[i] = r.irradiance == glm::vec3(0.0f) ? 1 : 0;
+    });
+    stats.finalClosedFallbacks = size_t(std::count(closed.begin(), closed.end(), uint8_t(1)));
     timer.mark("check");
     stage.reset();
   }

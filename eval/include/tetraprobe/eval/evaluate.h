@@ -20,8 +20,9 @@
 //   gross_error    = fraction of points with lum(x) > 2 lum(r) or lum(x) < lum(r) / 2 (off by more than 2x
 //   either way), luminances floored at 0.01 W/m^2 so two near-black values agree
 //   dark_holes     = fraction of points with lum(x) < 0.25 lum(r) (the same floor): black and dim polygons
-//   fallback       = fraction of all points where the method's answer uses the all-occluded fallback
-//   (ShadeRecord::fallback > 0); n/a (< 0) for a method without one
+//   fallback       = fraction of the open points where the method's answer uses the all-occluded fallback
+//   (ShadeRecord::fallback > 0); n/a (< 0) for a method without one. The points no path leaves that fall
+//   back are counted apart (closedFallbackPoints): no viewer sees their answer
 // The former definition, kept for comparison (the *AbsFloor fields, over all points, closed ones included):
 //   relmse = mean over p,c of (x - r)^2 / (r^2 + 0.01), rel error(p) = mean over c of |x - r| / sqrt(r^2 +
 //   0.01). Its fixed 0.01 W/m^2 floor lets one closed point with an answer of 27.9 W/m^2 add 279 / n to
@@ -83,7 +84,8 @@ struct MethodResult {
   double leakIndirect = 0.0;  // leak over the points lit only indirectly (EvalPoint::indirectOnly)
   double grossError = 0.0;    // fraction of points off by more than 2x either way (luminance)
   double darkHoles = 0.0;     // fraction of points below 0.25x the reference (luminance)
-  double fallback = -1.0;     // fraction of all points where the answer falls back; < 0: n/a (no fallback)
+  double fallback = -1.0;     // fraction of the open points where the answer falls back; < 0: n/a (no fallback)
+  size_t closedFallbackPoints = 0;  // points no path leaves where the answer falls back (not in `fallback`)
   // The former definition (fixed floor sqrt(r^2 + 0.01), over all points, closed ones included).
   double relmseAbsFloor = 0.0, meanRelAbsFloor = 0.0, p95RelAbsFloor = 0.0;
   glm::vec3 closedMean{0.0f};  // mean answer over the points no path leaves, W/m^2 (0 when there are none)

@@ -12,6 +12,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "tetraprobe/bake/bake.h"
 #include "tetraprobe/bake/tracer.h"
 #include "tetraprobe/runtime/level.h"
 #include "tetraprobe/runtime/query.h"
@@ -36,6 +37,7 @@ struct OcclusionHoleOptions {
   // probes' stars hides every probe) instead of the tet's own data (ownFallback): the bake's last round,
   // after refinement, aimed at what a viewer would see fall back.
   bool lookupOnly = false;
+  bool keepLookupFallbacks = false;  // fill OcclusionHoles::lookupFallbacks (the bake's final check)
 };
 
 inline constexpr int kMaxHolePoints = 1 << 25;  // 33.5 M points, about 1.3 GB of SurfacePoint
@@ -49,6 +51,7 @@ struct OcclusionHoles {
                                     // visibility after the face blend (lookupVisibility, face_blend.h) hides
                                     // every probe; fewer than holePoints, which judge the tet's data alone
   std::vector<glm::dvec3> probes;   // new probe positions, world metres, deterministic order
+  std::vector<SurfacePoint> lookupFallbacks;  // with keepLookupFallbacks: those points, in draw order
 };
 
 // New probes in front of surface points, shared by hole filling and error-driven refinement (eval/refine.h):
