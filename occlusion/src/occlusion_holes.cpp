@@ -143,7 +143,7 @@ OcclusionHoles findOcclusionHoles(const SceneTracer& tracer, const Level& level,
 
   const ProbeQuery query(level, kStoredCellGridOnly);  // a level being built may have no grid yet
   std::optional<ProbesInFront> proposals;
-  if (options.propose) proposals.emplace(tracer, level, options.spacing);
+  if (options.propose) proposals.emplace(tracer, level, options.spacing, options.maxOffset);
   FlushDenormalsScope ftz;
   ShadeRecord record;
   for (const SurfacePoint& sp : points) {

@@ -686,6 +686,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       OcclusionHoleOptions ho;
       ho.seed = options.bake.seed ^ (0x100c5ull + uint64_t(round));
       ho.lookupOnly = true;
+      ho.maxOffset = kLookupHoleOffset * options.spacing;
       if (!holeRound(ho, roundLabel("holes (lookup, ", round, options.lookupHoleRounds),
                      0x100c5ull + uint64_t(round), stats.lookupHoleRounds))
         break;

@@ -80,7 +80,9 @@ struct PipelineOptions {
   // Rounds after the hole rounds and refinement (whose probes re-tetrahedralize the level and open holes of
   // their own) that add probes where the lookup's answer, after the blend over the probes' stars, still falls
   // back (OcclusionHoleOptions::lookupOnly). 0 = none; needs occlusion and hole filling (holeRounds > 0).
-  int lookupHoleRounds = 2;
+  // Their proposals sit at most kLookupHoleOffset x spacing in front of their point (hole rounds: half a
+  // spacing), so that the new probe more often becomes a vertex of the point's tet.
+  int lookupHoleRounds = 6;
   // Error-driven refinement (eval/refine.h): at most this many probes added where the lookup's error
   // against the oracle is largest, measured at refinePoints area-uniform surface points. 0 = none, < 0 =
   // auto: a quarter of the probes that are not shell probes, at least 1024. With user probes alone
@@ -191,6 +193,7 @@ struct PipelineStats {
 // The final check's test of a fallback point for "no path leaves": this many reference paths (eval's
 // default --samples) that all find no light.
 inline constexpr int kClosedTestPaths = 4096;
+inline constexpr double kLookupHoleOffset = 0.125;
 inline constexpr int kFitPointsPerProbe = 6;
 inline constexpr int kFitPointsMin = 2048;
 

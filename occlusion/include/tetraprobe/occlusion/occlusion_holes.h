@@ -38,6 +38,8 @@ struct OcclusionHoleOptions {
   // after refinement, aimed at what a viewer would see fall back.
   bool lookupOnly = false;
   bool keepLookupFallbacks = false;  // fill OcclusionHoles::lookupFallbacks (the bake's final check)
+  // Proposals sit at most this far in front of their point (ProbesInFront's maxOffset; 0: spacing / 2).
+  double maxOffset = 0.0;
 };
 
 inline constexpr int kMaxHolePoints = 1 << 25;  // 33.5 M points, about 1.3 GB of SurfacePoint
