@@ -126,9 +126,13 @@ EvalReport reuseReference(const SceneTracer& tracer, const EvalOptions& options,
   return report;
 }
 
-bool noPathLeaves(const EvalPoint& point) {
-  const glm::vec3 r = point.reference.irradiance;
+bool noPathLeaves(const ReferenceIrradiance& reference) {
+  const glm::vec3 r = reference.irradiance;
   return r.x == 0.0f && r.y == 0.0f && r.z == 0.0f;
+}
+
+bool noPathLeaves(const EvalPoint& point) {
+  return noPathLeaves(point.reference);
 }
 
 void scoreMethod(EvalReport& report, const LookupMethod& method) {

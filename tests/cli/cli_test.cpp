@@ -962,11 +962,11 @@ std::string wallSceneObj(bool safe = false) {
     base += 8;
   };
   o << "mtllib wall.mtl\n";
-  box(-4, 0, -4, 4, 4, 4, "white", true);          // the room
-  box(-0.05, 0, -4, 0.05, 4, 4, "white", false);   // the wall
-  box(1.5, 0, -1, 1.55, 4, 1, "white", false);     // the panel in front of the wall, right side
-  box(-3, 3.9, -1, -2, 3.95, 1, "bright", false);  // left light (its underside glows)
-  box(2, 3.9, -1, 3, 3.95, 1, "dim", false);       // right light
+  box(-4, 0, -4, 4, 4, 4, "white", true);                // the room
+  box(-0.05, 0, -4, 0.05, 4, 4, "white", false);         // the wall
+  box(1.5, 0, -1, 1.55, 4, 1, "white", false);           // the panel in front of the wall, right side
+  box(-3, 3.9, -1, -2, 3.95, 1, "bright", false);        // left light (its underside glows)
+  box(2, 3.9, -1, 3, 3.95, 1, "dim", false);             // right light
   if (safe) box(-3, 0.5, 2, -2, 1.5, 3, "white", true);  // the sealed box, its faces inward
   return o.str();
 }
@@ -990,10 +990,10 @@ TEST_F(Cli, BakeCountsFallbackPointsNoPathLeavesApart) {
   for (const bool safe : {false, true}) {
     write("wall.obj", wallSceneObj(safe));
     const std::string report = path(safe ? "safe.json" : "nosafe.json").string();
-    const CliRun bake = run("bake " + path("wall.obj").string() + " --placement none --probes " +
-                            path("probes.csv").string() +
-                            " --samples 64 --noise 0 --fill-holes 0 --probe-budget 0 --fit off --threads 2 -o " +
-                            path("l.tpb").string() + " --report " + report);
+    const CliRun bake = run(
+        "bake " + path("wall.obj").string() + " --placement none --probes " + path("probes.csv").string() +
+        " --samples 64 --noise 0 --fill-holes 0 --probe-budget 0 --fit off --threads 2 -o " +
+        path("l.tpb").string() + " --report " + report);
     ASSERT_EQ(bake.code, 0) << bake.err;
     EXPECT_NE(bake.out.find("where no path leaves"), std::string::npos) << bake.out;
     const auto holes = nlohmann::json::parse(slurp(report)).at("holes");

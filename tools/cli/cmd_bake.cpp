@@ -322,7 +322,8 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
         "level by its data; %zu (%.2f %%) after the blend with the tets around them (the lookup's answer), "
         "%zu more where no path leaves (closed: %d paths found no light)\n",
         stats.finalHoles, stats.finalChecked, 100.0 * double(stats.finalHoles) / double(stats.finalChecked),
-        open, 100.0 * double(open) / double(stats.finalChecked), stats.finalClosedFallbacks, kClosedTestPaths);
+        open, 100.0 * double(open) / double(stats.finalChecked), stats.finalClosedFallbacks,
+        closedTestPaths());
   }
   const CellGrid& grid = level.cellGrid;
   const size_t gridBytes = cellGridBytes(grid), gridCells = occupiedCells(grid);

@@ -602,8 +602,9 @@ int cmdEval(int argc, char** argv) {
       std::printf(" W/m^2\n");
       for (const auto& m : report.methods)
         if (m.fallback >= 0.0 && m.closedFallbackPoints > 0)
-          std::printf("  %s falls back at %zu of them (not in its fallback share, which counts open points)\n",
-                      m.name.c_str(), m.closedFallbackPoints);
+          std::printf(
+              "  %s falls back at %zu of them (not in its fallback share, which counts open points)\n",
+              m.name.c_str(), m.closedFallbackPoints);
     }
   }
 

@@ -860,14 +860,14 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     stats.finalHoles = left.holePoints;
     stats.finalLookupFallbacks = left.lookupFallbackPoints;
     // Points no path leaves (a closed cavity: eval's noPathLeaves, evaluate.h) are counted apart: no viewer
-    // sees their answer. A point is one when kClosedTestPaths reference paths (eval's default count) find
+    // sees their answer. A point is one when closedTestPaths() reference paths (eval's default count) find
     // no light at all.
     std::vector<uint8_t> closed(left.lookupFallbacks.size(), 0);
     parallelFor(closed.size(), options.bake.threads, [&](size_t i) {
       const SurfacePoint& sp = left.lookupFallbacks[i];
-      const ReferenceIrradiance r = referenceIrradiance(tracer, sp.position, sp.normal, kClosedTestPaths,
+      const ReferenceIrradiance r = referenceIrradiance(tracer, sp.position, sp.normal, closedTestPaths(),
                                                         options.bake.seed ^ (0xc105edull + i), options.bake);
-      closed[i] = r.irradiance == glm::vec3(0.0f) ? 1 : 0;
+      closed[i] = noPathLeaves(r) ? 1 : 0;
     });
     stats.finalClosedFallbacks = size_t(std::count(closed.begin(), closed.end(), uint8_t(1)));
     timer.mark("check");

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tetraprobe/bake/bake.h"
+#include "tetraprobe/eval/evaluate.h"
 #include "tetraprobe/eval/refine.h"
 #include "tetraprobe/eval/sh_fit.h"
 #include "tetraprobe/occlusion/build_occlusion.h"
@@ -176,7 +177,8 @@ struct PipelineStats {
   size_t holeProbes = 0;
   size_t finalChecked = 0, finalHoles = 0;  // the finished level's (0, 0: no occlusion data)
   size_t finalLookupFallbacks = 0;          // of finalChecked, those whose run-time answer falls back
-  size_t finalClosedFallbacks = 0;  // of those, points no path leaves (kClosedTestPaths paths found no light)
+  size_t finalClosedFallbacks =
+      0;  // of those, points no path leaves (closedTestPaths() paths found no light)
   // Error-driven refinement: probes added, and the error at an independent draw of points before and after.
   size_t refineProbes = 0;
   ErrorEstimate refineBefore, refineAfter;
@@ -190,9 +192,11 @@ struct PipelineStats {
 };
 
 // The SH fit's automatic point count (PipelineOptions::fitPoints < 0).
-// The final check's test of a fallback point for "no path leaves": this many reference paths (eval's
-// default --samples) that all find no light.
-inline constexpr int kClosedTestPaths = 4096;
+// The final check's test of a fallback point for "no path leaves" (eval's noPathLeaves): this many reference
+// paths, eval's default --samples, that all find no light.
+inline int closedTestPaths() {
+  return EvalOptions{}.samplesPerPoint;
+}
 inline constexpr double kLookupHoleOffset = 0.125;
 inline constexpr int kFitPointsPerProbe = 6;
 inline constexpr int kFitPointsMin = 2048;

@@ -141,7 +141,8 @@ std::vector<OptionSpec> bakeOptionSpecs() {
        "probes, smaller levels and shorter bakes, accuracy mixed (docs/accuracy.md)",
        def("--hole-rule")},
       {"--lookup-holes", "", "ROUNDS",
-       "rounds after refinement that add a probe an eighth of the spacing in front of surface points where the "
+       "rounds after refinement that add a probe an eighth of the spacing in front of surface points where "
+       "the "
        "lookup's answer (after the blend over the probes' stars) still falls back; stops when none do; needs "
        "--fill-holes > 0 (0 = none)",
        def("--lookup-holes")},

@@ -84,7 +84,7 @@ struct MethodResult {
   double leakIndirect = 0.0;  // leak over the points lit only indirectly (EvalPoint::indirectOnly)
   double grossError = 0.0;    // fraction of points off by more than 2x either way (luminance)
   double darkHoles = 0.0;     // fraction of points below 0.25x the reference (luminance)
-  double fallback = -1.0;     // fraction of the open points where the answer falls back; < 0: n/a (no fallback)
+  double fallback = -1.0;  // fraction of the open points where the answer falls back; < 0: n/a (no fallback)
   size_t closedFallbackPoints = 0;  // points no path leaves where the answer falls back (not in `fallback`)
   // The former definition (fixed floor sqrt(r^2 + 0.01), over all points, closed ones included).
   double relmseAbsFloor = 0.0, meanRelAbsFloor = 0.0, p95RelAbsFloor = 0.0;
@@ -111,6 +111,7 @@ struct EvalPoint {
 // Whether no path leaves the point: its reference is exactly 0 in every channel (see the header comment;
 // the estimator's samples are never negative, so a zero mean means every sample was 0).
 bool noPathLeaves(const EvalPoint& point);
+bool noPathLeaves(const ReferenceIrradiance& reference);  // the same rule for a reference alone
 
 struct EvalReport {
   EvalSampling sampling = EvalSampling::kArea;
