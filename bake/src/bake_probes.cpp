@@ -429,6 +429,40 @@ ShRgb adaptiveSh(const SceneTracer& tracer, const glm::vec3& probe, const BakeOp
   return sh;
 }
 
+// One probe's work in a step of the adaptive bake (TraceStep): what bakeProbesImpl's passes and TraceRunner
+// both run, so a probe traced by a farm ends exactly as one traced here. `litMap` null: no lit patches.
+// Returns the error it reached against `floor` (passes 2 and 3; -1 for pass 1).
+double traceStep(const SceneTracer& tracer, const glm::dvec3& position, size_t index,
+                 const BakeOptions& options, const LitMap* litMap, double floor, TraceStep step, int stop,
+                 int capBatchesForPatches, AdaptiveProbe& st) {
+  DenormalScope denormals;
+  const glm::vec3 probe(position);
+  if (step == TraceStep::kPass1) {
+    while (st.batches < stop) addBatch(tracer, probe, index, options, nullptr, st);
+    return -1.0;
+  }
+  GuideSlot guide = resumeGuide(st);
+  const double before = adaptiveRelError(st, floor);
+  // Pass 2: the probes the flat cap would stop above the target, whether pass 2 stops there or at
+  // pass2MaxSamples. A budget round: a probe that restarted its estimate goes on with lit patches; one that
+  // would start them here (and restart) only when its share is at least the batches it would leave out of its
+  // estimate, so that a small share never leaves it an estimate of a batch or two.
+  guide.litPatches =
+      step == TraceStep::kPass2
+          ? needsLitPatches(st, before, options.targetRelError, capBatchesForPatches)
+          : st.estimated < st.batches || (stop - st.batches >= st.batches &&
+                                          needsLitPatches(st, before, options.targetRelError, stop));
+  while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
+    addBatch(tracer, probe, index, options, litMap, st, &guide);
+  keepGuide(guide, st, options.litVoxel > 0.0);
+  return adaptiveRelError(st, floor);
+}
+
+// The lit map of lit-patch sampling for a bake call's options and voxel edge.
+LitMap makeLitMap(const SceneTracer& tracer, double voxel, uint64_t seed, int threads) {
+  return LitMap(tracer, voxel * voxel / 16.0, voxel, seed, threads);
+}
+
 }  // namespace
 
 ShRgb bake_detail::bakeProbe(const SceneTracer& tracer, const glm::vec3& probe, size_t index,
@@ -599,33 +633,68 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
     };
     // The lit map of lit-patch sampling, built on first use (a merge whose probes all reached their target
     // traces none); the same in every process of a sharded bake (a pure function of the scene, the probes
-    // and the seed).
+    // and the seed). A farmed step sends its voxel edge instead, and the map is built where it is traced.
     std::optional<LitMap> lit;
     const bool usesLitMap = options.guide && options.litPatches != LitPatches::kOff && options.bounces >= 1 &&
                             (options.content & kContentIndirect) && !tracer.scene().lights.empty();
-    const LitMap* litMapUsed = nullptr;  // set (serially) before each pass that guides
+    const bool farmed = options.farm != nullptr && options.farm->probes;
+    double litVoxelUsed = 0.0;           // set (serially) before each pass that guides
+    const LitMap* litMapUsed = nullptr;  // the same, when this process traces
     auto buildLitMap = [&] {
-      if (usesLitMap && !lit) {
-        const double voxel = options.litVoxel > 0.0 ? options.litVoxel : litVoxelEdge(probes, skipped);
-        lit.emplace(tracer, voxel * voxel / 16.0, voxel, options.seed, options.threads);
-      }
+      if (usesLitMap && !(litVoxelUsed > 0.0))
+        litVoxelUsed = options.litVoxel > 0.0 ? options.litVoxel : litVoxelEdge(probes, skipped);
+      if (usesLitMap && !farmed && !lit)
+        lit.emplace(makeLitMap(tracer, litVoxelUsed, options.seed, options.threads));
       if (lit) litMapUsed = &*lit;
     };
     double floor = 0.0;
-    // Probe i's batches until its target or `stop`, going on with the guides its earlier passes learned;
-    // lit-patch sampling where takesLitPatches(its state) says.
-    auto traceTo = [&](size_t i, int stop, auto&& takesLitPatches) {
-      run(i, [&] {
-        DenormalScope denormals;
-        AdaptiveProbe& st = state[i];
-        GuideSlot guide = resumeGuide(st);
-        guide.litPatches = takesLitPatches(st);
-        while (st.batches < stop && !(adaptiveRelError(st, floor) <= options.targetRelError))
-          addBatch(tracer, glm::vec3(probes[i]), i, options, litMapUsed, st, &guide);
-        keepGuide(guide, st, options.litVoxel > 0.0);
-        achieved[i] = adaptiveRelError(st, floor);
+    // One step for the probes `which` (each to stopOf(its index)): traced here, or handed to the farm as one
+    // batch; either way each probe's state, error, rays and paths end the same.
+    auto runStep = [&](TraceStep step, const std::vector<size_t>& which, auto&& stopOf, const char* label) {
+      if (farmed) {
+        TraceBatch batch;
+        batch.step = step;
+        batch.options = options;
+        batch.options.farm = nullptr;
+        batch.floor = floor;
+        batch.litVoxel = step == TraceStep::kPass1 ? 0.0 : litVoxelUsed;
+        batch.capBatches = maxBatches;
+        batch.items.resize(which.size());
+        for (size_t k = 0; k < which.size(); ++k) {
+          TraceItem& item = batch.items[k];
+          item.index = uint32_t(which[k]);
+          item.position = probes[which[k]];
+          item.stop = int32_t(stopOf(which[k]));
+          copySums(state[which[k]], item.state);
+          item.state.achieved = achieved[which[k]];
+        }
+        options.farm->probes(batch);
+        if (batch.items.size() != which.size())
+          throw std::runtime_error("bake: the trace farm returned another number of probes");
+        for (size_t k = 0; k < which.size(); ++k) {
+          const size_t i = which[k];
+          const TraceItem& item = batch.items[k];
+          if (item.index != i) throw std::runtime_error("bake: the trace farm returned probes out of order");
+          copySums(item.state, state[i]);
+          if (step != TraceStep::kPass1) achieved[i] = item.state.achieved;
+          if (!taps.empty()) {
+            taps[i].intersects += item.intersectRays;
+            taps[i].occludeds += item.occludedRays;
+          }
+        }
+        return;
+      }
+      if (options.progress) progress = std::make_unique<Progress>(label, which.size(), "probes");
+      parallelFor(which.size(), options.threads, [&](size_t k) {
+        const size_t i = which[k];
+        run(i, [&] {
+          const double reached = traceStep(tracer, probes[i], i, options, litMapUsed, floor, step,
+                                           int(stopOf(i)), maxBatches, state[i]);
+          if (step != TraceStep::kPass1) achieved[i] = reached;
+        });
+        if (progress) progress->advance();
       });
-      paths[i] = state[i].batches * kBakeBatchSize;
+      if (progress) progress->finish();
     };
     achieved.assign(probes.size(), -1.0);
     if (role.resume) {
@@ -679,18 +748,11 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
             throw InputError("bake: no round-1 state for probe " + std::to_string(i));
         floor = r.floor;
       } else {
-        if (options.progress)
-          progress = std::make_unique<Progress>("bake (pass 1)", traced(role.pass1Only), "probes");
-        parallelFor(probes.size(), options.threads, [&](size_t i) {
-          if (skipped(i) || (role.pass1Only && !own(i))) return;
-          run(i, [&] {
-            DenormalScope denormals;
-            while (state[i].batches < minBatches)
-              addBatch(tracer, glm::vec3(probes[i]), i, options, nullptr, state[i]);
-          });
-          if (progress) progress->advance();
-        });
-        if (progress) progress->finish();
+        std::vector<size_t> first;
+        for (size_t i = 0; i < probes.size(); ++i)
+          if (!skipped(i) && !(role.pass1Only && !own(i))) first.push_back(i);
+        runStep(
+            TraceStep::kPass1, first, [&](size_t) { return minBatches; }, "bake (pass 1)");
         std::vector<double> means;
         for (size_t i = 0; i < probes.size(); ++i)
           if (!skipped(i)) means.push_back(std::abs(adaptiveMean(state[i])));
@@ -700,22 +762,19 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
         floor = std::numeric_limits<double>::quiet_NaN();  // not known until every shard's pass 1 is
         std::fill(achieved.begin(), achieved.end(), -1.0);
       }
-      if (!role.pass1Only) buildLitMap();
-      if (options.progress && !role.pass1Only)
-        progress = std::make_unique<Progress>("bake (to target)", traced(true), "probes");
-      parallelFor(role.pass1Only ? 0 : probes.size(), options.threads, [&](size_t i) {
-        if (skipped(i) || !own(i)) {
-          paths[i] = 0;
-          return;
+      if (!role.pass1Only) {
+        buildLitMap();
+        std::vector<size_t> second;
+        for (size_t i = 0; i < probes.size(); ++i) {
+          if (skipped(i) || !own(i))
+            paths[i] = 0;
+          else
+            second.push_back(i);
         }
-        // Which probes take lit patches: those the flat cap would stop above the target, whether pass 2
-        // stops there or at pass2MaxSamples.
-        traceTo(i, pass2Batches, [&](const AdaptiveProbe& st) {
-          return needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, maxBatches);
-        });
-        if (progress) progress->advance();
-      });
-      if (progress) progress->finish();
+        runStep(
+            TraceStep::kPass2, second, [&](size_t) { return pass2Batches; }, "bake (to target)");
+        for (size_t i : second) paths[i] = state[i].batches * kBakeBatchSize;
+      }
       if (role.out) {
         ShardBake& out = *role.out;
         out = ShardBake{};
@@ -762,22 +821,11 @@ std::vector<ShRgb> bakeProbesImpl(const SceneTracer& tracer, const std::vector<g
           budgetShares(asked, budgetBatches - used, options.targetRelError, ceilingBatches);
       if (stops.empty()) break;
       buildLitMap();
-      if (options.progress)
-        progress = std::make_unique<Progress>("bake (path budget)", open.size(), "probes");
-      parallelFor(open.size(), options.threads, [&](size_t k) {
-        const size_t i = open[k];
-        const int stop = stops[k];
-        // A probe that restarted its estimate goes on with lit patches; one that would start them here (and
-        // restart) only when its share is at least the batches it would leave out of its estimate, so that a
-        // small share never leaves it an estimate of a batch or two.
-        traceTo(i, stop, [&](const AdaptiveProbe& st) {
-          return st.estimated < st.batches ||
-                 (stop - st.batches >= st.batches &&
-                  needsLitPatches(st, adaptiveRelError(st, floor), options.targetRelError, stop));
-        });
-        if (progress) progress->advance();
-      });
-      if (progress) progress->finish();
+      std::vector<int> stopOf(probes.size(), 0);
+      for (size_t k = 0; k < open.size(); ++k) stopOf[open[k]] = stops[k];
+      runStep(
+          TraceStep::kBudget, open, [&](size_t i) { return stopOf[i]; }, "bake (path budget)");
+      for (size_t i : open) paths[i] = state[i].batches * kBakeBatchSize;
       used = batchesUsed();
     }
     budgetPaths = (used - usedBefore) * kBakeBatchSize;
@@ -915,6 +963,58 @@ std::vector<uint8_t> shardOwnership(const std::vector<glm::dvec3>& probes, int i
   std::vector<uint8_t> own(n, 0);
   for (size_t r = k * n / c; r < (k + 1) * n / c; ++r) own[order[r]] = 1;
   return own;
+}
+
+struct TraceRunner::Cache {
+  double voxel = 0.0;
+  uint64_t seed = 0;
+  std::optional<LitMap> lit;
+};
+
+TraceRunner::TraceRunner(const SceneTracer& tracer) : tracer_(tracer), cache_(std::make_unique<Cache>()) {}
+TraceRunner::~TraceRunner() = default;
+
+void TraceRunner::run(TraceBatch& batch, int threads) {
+  const BakeOptions& options = batch.options;
+  validateBakeOptions(options);
+  if (batch.step != TraceStep::kPass1 && batch.step != TraceStep::kPass2 && batch.step != TraceStep::kBudget)
+    throw InputError("trace batch: unknown step " + std::to_string(uint32_t(batch.step)));
+  const int64_t ceiling = int64_t(capBatches(options)) * kBakeBudgetCapFactor;
+  for (const TraceItem& item : batch.items) {
+    if (!std::isfinite(item.position.x) || !std::isfinite(item.position.y) || !std::isfinite(item.position.z))
+      throw InputError("trace batch: probe " + std::to_string(item.index) + " has a non-finite position");
+    if (item.stop < 0 || item.stop > ceiling || item.state.batches < 0 || item.state.batches > ceiling)
+      throw InputError("trace batch: probe " + std::to_string(item.index) +
+                       " has a stop or state out of range");
+  }
+  const LitMap* litMap = nullptr;
+  if (batch.litVoxel > 0.0) {
+    if (!std::isfinite(batch.litVoxel)) throw InputError("trace batch: non-finite lit map voxel");
+    Cache& c = *cache_;
+    if (!c.lit || c.voxel != batch.litVoxel || c.seed != options.seed) {
+      c.lit.reset();
+      c.lit.emplace(makeLitMap(tracer_, batch.litVoxel, options.seed, threads));
+      c.voxel = batch.litVoxel;
+      c.seed = options.seed;
+    }
+    litMap = &*c.lit;
+  }
+  parallelFor(batch.items.size(), threads, [&](size_t k) {
+    TraceItem& item = batch.items[k];
+    AdaptiveProbe st;
+    copySums(item.state, st);
+    RayTap tap;
+    double reached;
+    {
+      RayTapScope scope(tap);
+      reached = traceStep(tracer_, item.position, item.index, options, litMap, batch.floor, batch.step,
+                          item.stop, batch.capBatches, st);
+    }
+    copySums(st, item.state);
+    if (batch.step != TraceStep::kPass1) item.state.achieved = reached;
+    item.intersectRays = tap.intersects;
+    item.occludedRays = tap.occludeds;
+  });
 }
 
 }  // namespace tetraprobe

@@ -15,6 +15,7 @@
 #include "sampling.h"
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
+#include "tetraprobe/common/parallel.h"
 #include "tracer_impl.h"
 
 namespace tetraprobe {
@@ -124,6 +125,14 @@ ReferenceIrradiance referenceIrradianceToError(const SceneTracer& tracer, const 
   while (est.samples() < maxSamples && !(est.lumStderr() <= relError * std::abs(est.lumMean())))
     est.add(std::min(kBatch, maxSamples - est.samples()));
   return est.result();
+}
+
+void runReferenceBatch(const SceneTracer& tracer, ReferenceBatch& batch, int threads) {
+  parallelFor(batch.items.size(), threads, [&](size_t i) {
+    ReferenceItem& item = batch.items[i];
+    item.result =
+        referenceIrradiance(tracer, item.position, item.normal, batch.samples, item.seed, batch.options);
+  });
 }
 
 }  // namespace tetraprobe

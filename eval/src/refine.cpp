@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include <glm/geometric.hpp>
 
@@ -32,6 +33,25 @@ std::vector<RefinePoint> refinePoints(const SceneTracer& tracer, const RefineOpt
   bake.bounces = kUnboundedBounces;
   bake.content = options.content;
   bake.progress = false;
+  if (options.farm && options.farm->references) {
+    ReferenceBatch batch;
+    batch.options = bake;
+    batch.samples = options.samplesPerPoint;
+    batch.items.resize(surface.size());
+    for (size_t i = 0; i < surface.size(); ++i) {
+      batch.items[i].position = surface[i].position;
+      batch.items[i].normal = surface[i].normal;
+      batch.items[i].seed = splitmix64(options.seed ^ splitmix64(i));
+    }
+    options.farm->references(batch);
+    if (batch.items.size() != surface.size())
+      throw std::runtime_error("refine: the trace farm returned another number of points");
+    for (size_t i = 0; i < surface.size(); ++i) {
+      out[i].surface = surface[i];
+      out[i].reference = batch.items[i].result;
+    }
+    return out;
+  }
   Progress progress("refine (oracle)", surface.size(), "points", options.progress);
   parallelFor(surface.size(), options.threads, [&](size_t i) {
     out[i].surface = surface[i];

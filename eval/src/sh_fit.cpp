@@ -333,8 +333,9 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
 }
 
 std::vector<ShFitPoint> shFitPoints(const SceneTracer& tracer, int count, int samples, uint64_t seed,
-                                    uint32_t content, int threads, bool progress) {
+                                    uint32_t content, int threads, bool progress, const TraceFarm* farm) {
   RefineOptions ro;
+  ro.farm = farm;
   ro.points = count;
   ro.samplesPerPoint = samples;
   ro.content = content;

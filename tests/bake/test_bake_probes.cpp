@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <numbers>
 #include <string>
 
@@ -759,6 +760,66 @@ TEST(LitPatches, TheHistogramGoesOnFromPassToPassWithOneMap) {
   ownMap.litVoxel = 0.0;
   for (const ProbeBakeState& st : bakeProbesShard(tracer, probes, ownMap, all, nullptr).states)
     EXPECT_TRUE(st.patches.empty() && st.patchBatches == 0);
+}
+
+// A bake whose steps go to a farm (BakeOptions::farm) is the local bake byte for byte, however the farm splits
+// a step's probes: here each batch's items are dealt to three TraceRunners (each with its own lit-map cache and
+// thread count), on the roof-lit room with lit patches, a cap that stops every probe above the target and
+// a path budget, so pass 1, pass 2 and the budget's rounds all go to the farm; with the lit map fixed by
+// litVoxel and with each call's own. The stats (rays, paths, per-probe errors) agree too.
+TEST(TraceFarm, AFarmedBakeIsTheLocalBakeByteForByte) {
+  const Scene s = roofLitRoom();
+  const SceneTracer tracer(s);
+  const std::vector<glm::dvec3> probes = roofLitProbes();
+  std::vector<std::unique_ptr<TraceRunner>> runners;
+  for (int k = 0; k < 3; ++k) runners.push_back(std::make_unique<TraceRunner>(tracer));
+  std::array<int, 4> steps{};
+  TraceFarm farm;
+  farm.probes = [&](TraceBatch& batch) {
+    ++steps[size_t(batch.step)];
+    for (size_t part = 0; part < runners.size(); ++part) {
+      TraceBatch mine = batch;
+      mine.items.clear();
+      for (size_t k = part; k < batch.items.size(); k += runners.size()) mine.items.push_back(batch.items[k]);
+      runners[part]->run(mine, int(part) + 1);
+      for (size_t k = part, n = 0; k < batch.items.size(); k += runners.size(), ++n)
+        batch.items[k] = mine.items[n];
+    }
+  };
+  for (const bool fixedMap : {true, false}) {
+    BakeOptions local = quiet(kUnboundedBounces, 128, kContentDefault);
+    local.targetRelError = 1e-4;  // never reached: every probe stops at a cap
+    local.maxSamplesPerProbe = 1024;
+    local.pass2MaxSamples = 256;
+    local.pathBudget = kBakeBatchSize;  // pass 3 spends at least what the flat cap would have
+    local.litPatches = LitPatches::kBounces;
+    local.litVoxel = fixedMap ? litMapVoxelEdge(probes, nullptr) : 0.0;
+    BakeOptions farmed = local;
+    farmed.farm = &farm;
+    steps = {};
+    BakeStats a, b;
+    const std::vector<ShRgb> here = bakeProbes(tracer, probes, local, &a);
+    const std::vector<ShRgb> there = bakeProbes(tracer, probes, farmed, &b);
+    EXPECT_EQ(steps[size_t(TraceStep::kPass1)], 1);
+    EXPECT_EQ(steps[size_t(TraceStep::kPass2)], 1);
+    EXPECT_GE(steps[size_t(TraceStep::kBudget)], 1);
+    ASSERT_EQ(here.size(), there.size());
+    EXPECT_EQ(std::memcmp(here.data(), there.data(), here.size() * sizeof(ShRgb)), 0)
+        << "fixed map " << fixedMap;
+    EXPECT_GT(a.budgetPaths, 0u);
+    EXPECT_EQ(a.paths, b.paths);
+    EXPECT_EQ(a.budgetPaths, b.budgetPaths);
+    EXPECT_EQ(a.intersectRays, b.intersectRays);
+    EXPECT_EQ(a.occludedRays, b.occludedRays);
+    EXPECT_EQ(a.probeRelError, b.probeRelError);
+  }
+  TraceBatch bad;
+  bad.step = TraceStep::kPass1;
+  bad.options = quiet(kUnboundedBounces, 128, kContentDefault);
+  bad.options.targetRelError = 0.02;
+  bad.items.resize(1);
+  bad.items[0].position = glm::dvec3(std::nan(""), 0.0, 0.0);
+  EXPECT_THROW(runners[0]->run(bad, 1), InputError);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -23,6 +25,16 @@ inline constexpr int kUnboundedBounces = 1 << 20;
 
 // Lit-patch sampling (BakeOptions::litPatches).
 enum class LitPatches { kOff, kProbe, kBounces };
+
+// A trace farm (BakeOptions::farm; the batches are declared with TraceRunner below): tracing done elsewhere,
+// each batch in place, exactly as this process would (TraceRunner::run, runReferenceBatch). An empty
+// function: that kind of work stays here.
+struct TraceBatch;
+struct ReferenceBatch;
+struct TraceFarm {
+  std::function<void(TraceBatch& batch)> probes;          // a step of the adaptive bake's probes
+  std::function<void(ReferenceBatch& batch)> references;  // reference irradiance at surface points
+};
 
 struct BakeOptions {
   int bounces = kUnboundedBounces;  // diffuse bounces after the first hit (0 = direct light only)
@@ -69,7 +81,11 @@ struct BakeOptions {
   uint32_t content = kContentDefault;   // which light the probes hold (ProbeContent flags)
   uint64_t seed = 0x7e77a9b0be5eedull;  // base seed; each probe/point derives its own from it and its index
   bool progress = true;                 // progress bar on a terminal
-  int shOrder = 2;                      // 2: L2 (9 coefficients); 1: L1, coefficients 4..8 set to exactly 0
+  // Adaptive sampling: when set (and its `probes`), every step that traces probes (pass 1, pass 2, each round
+  // of the path budget) hands them to this farm as one TraceBatch instead of tracing them here (docs/distributed.md#the-
+  // merge-farmed). Never changes the result: a farm traces each probe as runTraceBatch does. Not owned.
+  const TraceFarm* farm = nullptr;
+  int shOrder = 2;  // 2: L2 (9 coefficients); 1: L1, coefficients 4..8 set to exactly 0
 };
 
 // What a bake cost. Ray counts are summed per probe, so they are identical for any thread count.
@@ -216,6 +232,52 @@ std::vector<ShRgb> bakeProbesMerged(const SceneTracer& tracer, const std::vector
                                     const BakeOptions& options, const ShardBake& merged,
                                     BakeStats* stats = nullptr, const std::vector<uint8_t>* skip = nullptr);
 
+// ---- Trace farm (bake/src/bake_probes.cpp; protocol in docs/distributed.md#the-merge-farmed) ----
+//
+// The per-probe work of one step of the adaptive bake, as data: which probes, where each stops, their states
+// before the step. A probe's batches draw from streams keyed by (seed, its index, batch), so the states after
+// the step depend only on the batch, never on which process traced it or how the items were split.
+
+// The steps of bakeProbes's adaptive passes.
+enum class TraceStep : uint32_t {
+  kPass1 = 1,  // batches up to `stop` (pass 1's minimum), unguided
+  kPass2 =
+      2,  // to the target or `stop`; lit patches where a flat cap of capBatches stops it above the target
+  kBudget = 3,  // a path-budget round: to the target or `stop` (the probe's share)
+};
+
+struct TraceItem {
+  uint32_t index = 0;        // the probe's index in its bake call (it keys the probe's random streams)
+  glm::dvec3 position{0.0};  // finite
+  int32_t stop = 0;          // batches the probe may reach in this step
+  ProbeBakeState state;      // in: before the step; out: after it (achieved set by passes 2 and 3)
+  uint64_t intersectRays = 0, occludedRays = 0;  // out: the rays this step traced for the probe
+};
+
+struct TraceBatch {
+  TraceStep step = TraceStep::kPass1;
+  BakeOptions options;     // the bake call's (threads, progress and farm play no part)
+  double floor = 0.0;      // the error floor (passes 2 and 3)
+  double litVoxel = 0.0;   // > 0: the lit map's voxel edge, for a step that guides with one; 0: no lit map
+  int32_t capBatches = 0;  // pass 2's lit-patch rule: the flat cap in batches
+  std::vector<TraceItem> items;
+};
+
+// Traces a batch's items in this process, each exactly as bakeProbes's step would; keeps the last lit map it
+// built (scene, voxel, seed) for the next batch. `threads` 0 = all cores; never changes the result.
+// InputError for a non-finite position, a stop outside [0, 16 x the cap] or an unknown step.
+class TraceRunner {
+ public:
+  explicit TraceRunner(const SceneTracer& tracer);
+  ~TraceRunner();
+  void run(TraceBatch& batch, int threads);
+
+ private:
+  struct Cache;
+  const SceneTracer& tracer_;
+  std::unique_ptr<Cache> cache_;
+};
+
 // Sets coefficients 4..8 to exactly zero (an L1 probe, runtime/sh.h) when order == 1; no-op for order 2.
 void truncateShOrder(std::vector<ShRgb>& sh, int order);
 
@@ -267,6 +329,25 @@ ReferenceIrradiance referenceIrradianceToError(const SceneTracer& tracer, const 
                                                const glm::vec3& normal, double relError, int maxSamples,
                                                uint64_t seed, const BakeOptions& options,
                                                int minSamples = 64);
+
+// Reference irradiance at surface points, as data (a farm's other kind of work): per point its position,
+// unit normal and seed; out, referenceIrradiance(tracer, position, normal, samples, seed, options).
+struct ReferenceItem {
+  glm::dvec3 position{0.0};
+  glm::vec3 normal{0.0f, 0.0f, 1.0f};
+  uint64_t seed = 0;
+  ReferenceIrradiance result;  // out
+};
+
+struct ReferenceBatch {
+  BakeOptions options;  // bounces and content are what the reference reads
+  int32_t samples = 0;  // paths a point
+  std::vector<ReferenceItem> items;
+};
+
+// Fills every item's result (parallel over items; `threads` 0 = all cores, never changes the result). Throws
+// InputError as referenceIrradiance does.
+void runReferenceBatch(const SceneTracer& tracer, ReferenceBatch& batch, int threads);
 
 struct SurfacePoint {
   glm::dvec3 position{0.0};

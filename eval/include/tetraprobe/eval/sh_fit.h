@@ -86,9 +86,10 @@ std::vector<ShRgb> fitProbeSh(const Level& level, const std::vector<ShFitPoint>&
 
 // Points where a fit or its hold-out measures: `count` area-uniform surface points (sampleSurfacePoints,
 // seeded by `seed`: points a viewer could stand in front of) with referenceIrradiance at `samples` paths
-// (unbounded depth, `content`). Deterministic for any thread count.
+// (unbounded depth, `content`). Deterministic for any thread count; `farm` as RefineOptions::farm.
 std::vector<ShFitPoint> shFitPoints(const SceneTracer& tracer, int count, int samples, uint64_t seed,
-                                    uint32_t content, int threads = 0, bool progress = false);
+                                    uint32_t content, int threads = 0, bool progress = false,
+                                    const TraceFarm* farm = nullptr);
 
 // The hold-out score of the level's `tet` lookup (ProbeQuery::irradiance, its stored occlusion and fallback
 // included) at `points`, as eval scores (evaluate.h), over the points whose target is not 0 in every channel:
