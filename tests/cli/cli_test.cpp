@@ -323,6 +323,66 @@ TEST_F(Cli, TwoRoundShardsEqualOneProcessBake) {
   EXPECT_NE(early.err.find("round-1"), std::string::npos) << early.err;
 }
 
+// A merge whose tracing goes to a farm of worker processes (merge --farm DIR --workers 2, tetraprobe worker)
+// writes the one-process bake's level byte for byte, and says in its summary how long it waited on them; a
+// farm directory holding an earlier run's files is refused, and a worker that loaded another scene stops the
+// merge with one line naming the problem.
+TEST_F(Cli, FarmedMergeEqualsOneProcessBake) {
+  write("box.obj", kBoxObj);
+  write("box.mtl", kBoxMtl);
+  const std::string base =
+      "bake " + path("box.obj").string() +
+      " --samples 32 --max-samples 256 --path-budget 100000 --spacing 0.75 --threads 2 --fill-holes 1 "
+      "--probe-budget 64";
+  for (int i = 0; i < 2; ++i)
+    ASSERT_EQ(run(base + " --shard " + std::to_string(i) + "/2 -o " +
+                  path("s" + std::to_string(i) + ".part").string())
+                  .code,
+              0);
+  const std::string tp = TETRAPROBE_CLI, parts = path("s0.part").string() + " " + path("s1.part").string();
+  // The workers and the merge at once, as a scheduler starts them; the shell waits for all three.
+  auto farmed = [&](const std::string& farm, const std::string& workerScene, const std::string& out) {
+    std::string cmd = "(";
+    for (int i = 0; i < 2; ++i)
+      cmd += tp + " worker " + workerScene + " --farm " + farm + " --index " + std::to_string(i) +
+             "/2 --threads 1 --farm-timeout 30 >" + path("w" + std::to_string(i) + ".log").string() +
+             " 2>&1 & ";
+    cmd += tp + " merge " + parts + " -o " + out + " --farm " + farm + " --workers 2 --farm-timeout 30 >" +
+           path("m.out").string() + " 2>" + path("m.err").string() + "; s=$?; wait; exit $s)";
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+  };
+  ASSERT_EQ(farmed(path("farm").string(), path("box.obj").string(), path("merged.tpb").string()), 0)
+      << slurp(path("m.err")) << slurp(path("w0.log"));
+  // Both kinds of work went to the farm: the rounds' probe steps and the refinement's and fit's points.
+  const std::string summary = slurp(path("m.out"));
+  EXPECT_NE(summary.find("waiting on them"), std::string::npos) << summary;
+  EXPECT_EQ(summary.find(" 0 probe steps"), std::string::npos) << summary;
+  EXPECT_EQ(summary.find(" 0 reference points"), std::string::npos) << summary;
+  EXPECT_NE(slurp(path("w1.log")).find("traced its share"), std::string::npos) << slurp(path("w1.log"));
+  ASSERT_EQ(run(base + " -o " + path("one.tpb").string()).code, 0);
+  const std::string a = slurp(path("merged.tpb")), b = slurp(path("one.tpb"));
+  ASSERT_FALSE(a.empty());
+  EXPECT_TRUE(a == b) << "farmed merge differs from the one-process bake";
+
+  // The same directory again: its `done` would stop new workers at once.
+  const CliRun stale = run("merge " + parts + " -o " + path("again.tpb").string() + " --farm " +
+                           path("farm").string() + " --workers 2");
+  EXPECT_EQ(stale.code, 2) << stale.err;
+  EXPECT_NE(stale.err.find("earlier run"), std::string::npos) << stale.err;
+  EXPECT_FALSE(fs::exists(path("again.tpb")));
+
+  // Workers on another scene (the box moved by a centimetre: same probes, another content hash).
+  std::string moved = kBoxObj;
+  moved.replace(moved.find("v 0 0 0\n"), 8, "v 0.01 0 0\n");
+  write("moved.obj", moved);
+  const int code = farmed(path("farm2").string(), path("moved.obj").string(), path("other.tpb").string());
+  EXPECT_EQ(code, 2) << slurp(path("m.err"));
+  EXPECT_EQ(lineCount(slurp(path("m.err"))), 1) << slurp(path("m.err"));
+  EXPECT_NE(slurp(path("m.err")).find("another scene"), std::string::npos) << slurp(path("m.err"));
+  EXPECT_FALSE(fs::exists(path("other.tpb")));
+}
+
 // merge refuses parts that do not belong together, with one line naming the problem and exit 2, and
 // writes nothing: a missing shard, a shard given twice, other options, a damaged part; bake refuses a
 // shard index out of range and a sharded bake without adaptive sampling.

@@ -16,6 +16,7 @@
 #include "tetraprobe/common/progress.h"
 #include "tetraprobe/runtime/sh_half.h"
 #include "tetraprobe/scene/load.h"
+#include "trace_farm.h"
 
 namespace tetraprobe::cli {
 
@@ -154,9 +155,19 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
 
   if (spacingAuto) opt.spacing = autoSpacing(scene);
 
+  // `merge --farm`: the merge's tracing goes to the workers (trace_farm.h); the level is the same bytes.
+  std::optional<FileFarm> farm;
+  TraceFarm farmFunction;
+  if (merge && !merge->farmDir.empty()) {
+    farm.emplace(merge->farmDir, merge->farmWorkers, sceneHash, merge->farmTimeout);
+    farmFunction = farm->function();
+    opt.bake.farm = &farmFunction;
+  }
+
   PipelineStats stats;
   stats.timings.emplace_back("load", loadSeconds);
   Level level = buildLevel(scene, opt, stats);
+  if (farm) farm->finish();
 
   if (opt.shardCount > 0) {
     ShardPart part;
@@ -339,6 +350,12 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
       (unsigned long long)fileBytes,
       level.probes.empty() ? 0.0 : double(fileBytes) / double(level.probes.size()),
       (unsigned long long)probeBytes, (unsigned long long)shBytes, (unsigned long long)tetBytes);
+  if (farm)
+    std::printf(
+        "  farm    %d workers, %d jobs, %llu probe steps and %llu reference points traced there; %.2fs "
+        "waiting on them, %.2fs serial (the rest)\n",
+        merge->farmWorkers, farm->jobs(), (unsigned long long)farm->items(),
+        (unsigned long long)farm->points(), farm->waitSeconds(), total - farm->waitSeconds());
   std::printf("  time   ");
   for (const auto& [stage, s] : stats.timings) std::printf(" %s %.2fs", stage.c_str(), s);
   std::printf("  (total %.2fs)\n", total);
@@ -503,6 +520,10 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
     for (const auto& [stage, s] : stats.timings) timings[stage] = s;
     timings["total"] = total;
     j["timings_s"] = timings;
+    if (farm)
+      j["farm"] = {{"workers", merge->farmWorkers}, {"jobs", farm->jobs()},
+                   {"probe_steps", farm->items()},  {"reference_points", farm->points()},
+                   {"wait_s", farm->waitSeconds()}, {"serial_s", total - farm->waitSeconds()}};
     j["bytes"] = {{"total", fileBytes}, {"probes", probeBytes}, {"sh", shBytes}, {"tets", tetBytes}};
     writeJsonReport(args.str("--report"), j);
   }

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "shard_part.h"
 #include "tetraprobe/common/error.h"
+#include "trace_farm.h"
 
 namespace tetraprobe::cli {
 
@@ -23,6 +24,14 @@ int cmdMerge(int argc, char** argv) {
       {{"--output", "-o", "LEVEL.tpb", "level file to write", ""},
        {"--report", "", "FILE.json", "also write a JSON report of the bake", ""},
        {"--threads", "", "N", "worker threads, 0 = all cores (never changes the output)", "0"},
+       {"--farm", "", "DIR",
+        "hand the merge's tracing (the probes its rounds add, the path budget) to `tetraprobe worker` "
+        "processes through this directory (shared by every process; empty or new)",
+        ""},
+       {"--workers", "", "N", "with --farm: the number of workers (each started with --index I/N)", "0"},
+       {"--farm-timeout", "", "SECONDS",
+        "with --farm: stop when a worker gives no sign of life for this long",
+        std::to_string(int(kFarmDefaultTimeout))},
        {"--floor", "", "",
         "two-round protocol: join round-1 parts (bake --round 1) into the floor part that round 2 "
         "(bake --round 2 --floor FILE) needs, instead of a level",
@@ -52,6 +61,17 @@ int cmdMerge(int argc, char** argv) {
   checkShardSet(parts, args.positional(), PartStage::kPass12);
   const ShardPart& first = parts[0];
   MergedShards merged;
+  if (args.has("--farm")) {
+    const double workers = args.number("--workers"), timeout = args.number("--farm-timeout");
+    if (!(workers >= 1 && workers <= 65536 && workers == double(int(workers))))
+      throw UsageError("--farm needs --workers N, an integer from 1 to 65536");
+    if (!(timeout > 0.0)) throw UsageError("--farm-timeout must be > 0");
+    merged.farmDir = args.str("--farm");
+    merged.farmWorkers = int(workers);
+    merged.farmTimeout = timeout;
+  } else if (args.has("--workers")) {
+    throw UsageError("--workers needs --farm DIR");
+  }
   merged.sceneHash = first.sceneHash;
   merged.probeCount = first.probeCount;
   merged.bake.floor = first.bake.floor;

@@ -13,6 +13,7 @@ int cmdBake(int argc, char** argv);
 // `bake` itself; with `merge` (from `tetraprobe merge`), the shards' probe states replace bake passes 1-2.
 int runBake(int argc, char** argv, const MergedShards* merge);
 int cmdMerge(int argc, char** argv);
+int cmdWorker(int argc, char** argv);
 int cmdStream(int argc, char** argv);
 int cmdInspect(int argc, char** argv);
 int cmdQuery(int argc, char** argv);

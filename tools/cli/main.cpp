@@ -21,6 +21,8 @@ constexpr Command kCommands[] = {
     {"bake", tetraprobe::cli::cmdBake, "place probes, path-trace their SH, tetrahedralize, write LEVEL.tpb"},
     {"merge", tetraprobe::cli::cmdMerge,
      "join the part files of a sharded bake (bake --shard I/N) into LEVEL.tpb"},
+    {"worker", tetraprobe::cli::cmdWorker,
+     "trace a share of a merge's probes (merge --farm DIR --workers N)"},
     {"stream", tetraprobe::cli::cmdStream, "add a streaming index (sectors + coarse probe set) to a level"},
     {"inspect", tetraprobe::cli::cmdInspect, "print what a level file holds"},
     {"query", tetraprobe::cli::cmdQuery, "irradiance at points, from the level file (CPU runtime)"},

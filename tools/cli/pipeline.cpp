@@ -765,6 +765,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     ro.threads = options.bake.threads;
     ro.seed = options.bake.seed ^ 0x2ef1eull;
     ro.progress = show;  // the oracle's references, by point
+    ro.farm = options.bake.farm;
     select = refinePoints(tracer, ro);
     ro.seed = options.bake.seed ^ 0x7a11dull;
     check = refinePoints(tracer, ro);
@@ -811,7 +812,7 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
       if (out.size() < size_t(count)) {
         const std::vector<ShFitPoint> more =
             shFitPoints(tracer, count - int(out.size()), options.fitSamples, seed, options.bake.content,
-                        options.bake.threads, show);
+                        options.bake.threads, show, options.bake.farm);
         out.insert(out.end(), more.begin(), more.end());
       }
       return out;
@@ -862,13 +863,21 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     // Points no path leaves (a closed cavity: eval's noPathLeaves, evaluate.h) are counted apart: no viewer
     // sees their answer. A point is one when closedTestPaths() reference paths (eval's default count) find
     // no light at all.
-    std::vector<uint8_t> closed(left.lookupFallbacks.size(), 0);
-    parallelFor(closed.size(), options.bake.threads, [&](size_t i) {
-      const SurfacePoint& sp = left.lookupFallbacks[i];
-      const ReferenceIrradiance r = referenceIrradiance(tracer, sp.position, sp.normal, closedTestPaths(),
-                                                        options.bake.seed ^ (0xc105edull + i), options.bake);
-      closed[i] = noPathLeaves(r) ? 1 : 0;
-    });
+    ReferenceBatch paths;
+    paths.options = options.bake;
+    paths.options.farm = nullptr;
+    paths.samples = closedTestPaths();
+    for (size_t i = 0; i < left.lookupFallbacks.size(); ++i)
+      paths.items.push_back({left.lookupFallbacks[i].position,
+                             left.lookupFallbacks[i].normal,
+                             options.bake.seed ^ (0xc105edull + i),
+                             {}});
+    if (options.bake.farm && options.bake.farm->references)
+      options.bake.farm->references(paths);
+    else
+      runReferenceBatch(tracer, paths, options.bake.threads);
+    std::vector<uint8_t> closed(paths.items.size(), 0);
+    for (size_t i = 0; i < paths.items.size(); ++i) closed[i] = noPathLeaves(paths.items[i].result) ? 1 : 0;
     stats.finalClosedFallbacks = size_t(std::count(closed.begin(), closed.end(), uint8_t(1)));
     timer.mark("check");
     stage.reset();

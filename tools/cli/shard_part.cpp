@@ -2,6 +2,8 @@
 // so they do not depend on the compiler; the checksum is FNV-1a 64 (Fowler, Noll, Vo).
 #include "shard_part.h"
 
+#include "state_io.h"
+
 #include <bit>
 #include <climits>
 #include <cstring>
@@ -15,60 +17,8 @@ namespace tetraprobe::cli {
 
 namespace {
 
-static_assert(std::endian::native == std::endian::little, "part files are written on little-endian hosts");
-
 constexpr char kMagic[8] = {'T', 'P', 'S', 'H', 'A', 'R', 'D', '3'};
-constexpr size_t kRecordBytes =
-    4 + 8 * 27 + 4 + 4 + 8 * 6 + 8 * 6 + 8 + 8 + 8 + 4 * kBakeGuideBins + 4 + 4 + 4;
-
-uint64_t fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
-  return h;
-}
-
-class Writer {
- public:
-  template <class T>
-  void put(const T& v) {
-    static_assert(std::is_arithmetic_v<T>);
-    const size_t at = bytes.size();
-    bytes.resize(at + sizeof(T));
-    std::memcpy(bytes.data() + at, &v, sizeof(T));
-  }
-  std::string bytes;
-};
-
-class Reader {
- public:
-  Reader(const std::vector<char>& b, const std::string& path) : b_(b), path_(path) {}
-  template <class T>
-  T get() {
-    need(sizeof(T));
-    T v;
-    std::memcpy(&v, b_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return v;
-  }
-  void need(size_t n) const {
-    if (b_.size() - at_ < n) fail("truncated");
-  }
-  std::string text(size_t n) {
-    need(n);
-    std::string s(b_.data() + at_, n);
-    at_ += n;
-    return s;
-  }
-  [[noreturn]] void fail(const std::string& why) const {
-    throw InputError("shard part " + path_ + ": " + why);
-  }
-  size_t at() const { return at_; }
-
- private:
-  const std::vector<char>& b_;
-  const std::string& path_;
-  size_t at_ = 0;
-};
+constexpr size_t kRecordBytes = 4 + kProbeStateBytes;
 
 struct Hasher {
   uint64_t h = 0xcbf29ce484222325ull;
@@ -138,7 +88,7 @@ uint64_t sceneContentHash(const Scene& s) {
 }
 
 void writeShardPart(const std::string& path, const ShardPart& part) {
-  Writer w;
+  ByteWriter w;
   w.bytes.assign(kMagic, kMagic + 8);
   w.put(uint32_t(part.stage));
   w.put(part.index);
@@ -150,27 +100,10 @@ void writeShardPart(const std::string& path, const ShardPart& part) {
   w.bytes += part.options;
   w.put(uint64_t(part.bake.probes.size()));
   for (size_t k = 0; k < part.bake.probes.size(); ++k) {
-    const ProbeBakeState& s = part.bake.states[k];
     w.put(part.bake.probes[k]);
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) w.put(s.acc[i][c]);
-    w.put(s.batches);
-    w.put(s.estimated);
-    for (double v : s.mean) w.put(v);
-    for (double v : s.m2) w.put(v);
-    w.put(s.achieved);
-    w.put(s.intersectRays);
-    w.put(s.occludedRays);
-    for (float v : s.guide) w.put(v);
-    w.put(s.guideBatches);
-    w.put(uint32_t(s.patches.size()));
-    for (const auto& [key, value] : s.patches) {
-      w.put(key);
-      w.put(value);
-    }
-    w.put(s.patchBatches);
+    putProbeState(w, part.bake.states[k]);
   }
-  w.put(fnv1a(w.bytes.data(), w.bytes.size()));
+  w.seal();
   std::string error;
   if (!writeFileAtomic(path, w.bytes, &error)) throw std::runtime_error(error);
 }
@@ -179,16 +112,8 @@ ShardPart readShardPart(const std::string& path) {
   std::vector<char> bytes;
   std::string error;
   if (!readFile(path, bytes, &error)) throw InputError(error);
-  Reader r(bytes, path);
-  if (bytes.size() >= 8 && std::memcmp(bytes.data(), kMagic, 7) == 0 && bytes[7] != kMagic[7])
-    r.fail("a shard part file of another version (" + std::string(bytes.data(), 8) +
-           "): bake its shards again with this tetraprobe");
-  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) r.fail("not a shard part file");
-  if (bytes.size() < 16) r.fail("truncated");
-  uint64_t stored;
-  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
-  if (fnv1a(bytes.data(), bytes.size() - 8) != stored) r.fail("checksum mismatch (damaged or truncated)");
-  r.text(8);
+  ByteReader r(bytes, "shard part", path);
+  r.open(kMagic);
   ShardPart p;
   const uint32_t stage = r.get<uint32_t>();
   if (stage < 1 || stage > 3) r.fail("unknown stage " + std::to_string(stage));
@@ -205,37 +130,16 @@ ShardPart readShardPart(const std::string& path) {
   r.need(optionBytes);
   p.options = r.text(size_t(optionBytes));
   const uint64_t k = r.get<uint64_t>();
-  if (k > p.probeCount || k > (bytes.size() - r.at()) / kRecordBytes) r.fail("bad record count");
+  if (k > p.probeCount || k > r.left() / kRecordBytes) r.fail("bad record count");
   p.bake.probes.resize(size_t(k));
   p.bake.states.resize(size_t(k));
   for (size_t n = 0; n < k; ++n) {
-    ProbeBakeState& s = p.bake.states[n];
     p.bake.probes[n] = r.get<uint32_t>();
     if (p.bake.probes[n] >= p.probeCount || (n > 0 && p.bake.probes[n] <= p.bake.probes[n - 1]))
       r.fail("probe indices out of range or not increasing");
-    for (int i = 0; i < kShCoeffCount; ++i)
-      for (int c = 0; c < 3; ++c) s.acc[i][c] = r.get<double>();
-    s.batches = r.get<int32_t>();
-    s.estimated = r.get<int32_t>();
-    for (double& v : s.mean) v = r.get<double>();
-    for (double& v : s.m2) v = r.get<double>();
-    s.achieved = r.get<double>();
-    s.intersectRays = r.get<uint64_t>();
-    s.occludedRays = r.get<uint64_t>();
-    for (float& v : s.guide) v = r.get<float>();
-    s.guideBatches = r.get<int32_t>();
-    if (s.guideBatches < 0 || s.guideBatches > s.batches) r.fail("bad guide batch count");
-    const uint32_t patches = r.get<uint32_t>();
-    if (patches > (bytes.size() - r.at()) / 16) r.fail("bad lit-patch histogram size");
-    s.patches.resize(patches);
-    for (auto& [key, value] : s.patches) {
-      key = r.get<uint64_t>();
-      value = r.get<double>();
-    }
-    s.patchBatches = r.get<int32_t>();
-    if (s.patchBatches < 0 || s.patchBatches > s.batches) r.fail("bad lit-patch batch count");
+    p.bake.states[n] = getProbeState(r);
   }
-  if (r.at() + 8 != bytes.size()) r.fail("trailing bytes");
+  r.finish();
   return p;
 }
 

@@ -33,6 +33,10 @@ struct MergedShards {
   uint64_t sceneHash = 0;
   uint64_t probeCount = 0;
   ShardBake bake;  // every shard's probes and states, in shard order
+  // `merge --farm DIR --workers N` (trace_farm.h): the merge's tracing goes to N workers through DIR.
+  std::string farmDir;
+  int farmWorkers = 0;
+  double farmTimeout = 0.0;
 };
 
 // FNV-1a (64-bit) over everything the bake reads from a scene: geometry, materials, cutouts, lights, sky,

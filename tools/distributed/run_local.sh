@@ -3,6 +3,8 @@
 # then the one-process bake with the same options; exits 1 unless the two levels are byte for byte equal.
 # usage: run_local.sh TETRAPROBE SCENE N WORKDIR [bake options...]   (docs/distributed.md)
 # ROUNDS=2 in the environment runs the two-round protocol (bake --round 1, merge --floor, bake --round 2).
+# FARM=W in the environment runs the merge with a trace farm of W workers (merge --farm, tetraprobe worker),
+# started beside it.
 set -euo pipefail
 if [ $# -lt 4 ]; then
   echo "usage: $0 TETRAPROBE SCENE N WORKDIR [bake options...]" >&2
@@ -37,8 +39,20 @@ else
   shards shard
 fi
 shards=$(date +%s.%N)
-"$tp" merge "$work"/shard*.part -o "$work/merged.tpb" >"$work/merge.log" 2>&1 ||
-  { cat "$work/merge.log" >&2; exit 1; }
+farm=()
+wpids=()
+if [ "${FARM:-0}" -gt 0 ]; then
+  farm=(--farm "$work/farm" --workers "$FARM")
+  for ((i = 0; i < FARM; i++)); do
+    "$tp" worker "$scene" --farm "$work/farm" --index "$i/$FARM" >"$work/worker$i.log" 2>&1 &
+    wpids+=($!)
+  done
+fi
+"$tp" merge "$work"/shard*.part -o "$work/merged.tpb" "${farm[@]}" >"$work/merge.log" 2>&1 ||
+  { cat "$work/merge.log" "$work"/worker*.log >&2 2>/dev/null; exit 1; }
+for p in "${wpids[@]}"; do
+  wait "$p" || { echo "run_local: a worker failed:" >&2; cat "$work"/worker*.log >&2; exit 1; }
+done
 merged=$(date +%s.%N)
 "$tp" bake "$scene" -o "$work/single.tpb" "$@" >"$work/single.log" 2>&1 || { cat "$work/single.log" >&2; exit 1; }
 single=$(date +%s.%N)
