@@ -159,7 +159,7 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   std::optional<FileFarm> farm;
   TraceFarm farmFunction;
   if (merge && !merge->farmDir.empty()) {
-    farm.emplace(merge->farmDir, merge->farmWorkers, sceneHash, merge->farmTimeout);
+    farm.emplace(merge->farmDir, merge->farmWorkers, sceneHash, merge->farmTimeout, opt.bake.progress);
     farmFunction = farm->function();
     opt.bake.farm = &farmFunction;
   }

@@ -304,8 +304,13 @@ void decodeFarmPointResult(const std::vector<char>& bytes, const std::string& pa
   r.finish();
 }
 
-FileFarm::FileFarm(std::string dir, int workers, uint64_t sceneHash, double timeout)
-    : dir_(std::move(dir)), workers_(workers), sceneHash_(sceneHash), timeout_(timeout), beat_([&] {
+FileFarm::FileFarm(std::string dir, int workers, uint64_t sceneHash, double timeout, bool progress)
+    : dir_(std::move(dir)),
+      workers_(workers),
+      sceneHash_(sceneHash),
+      timeout_(timeout),
+      progress_(progress),
+      beat_([&] {
         if (workers < 1) throw UsageError("--workers must be at least 1");
         std::error_code ec;
         fs::create_directories(dir_, ec);
@@ -353,6 +358,7 @@ void FileFarm::traceReferences(ReferenceBatch& batch) {
 void FileFarm::collect(uint64_t job,
                        const std::function<void(const std::vector<char>&, const std::string&, int)>& decode) {
   const double t0 = now();
+  Progress shown("farm job " + std::to_string(job), uint64_t(workers_), "workers", progress_);
   std::vector<uint8_t> done(size_t(workers_), 0);
   int left = workers_;
   while (left > 0) {
@@ -366,6 +372,7 @@ void FileFarm::collect(uint64_t job,
       const std::string path = resultPath(dir_, job, i, ".result");
       if (const auto bytes = readIfThere(path)) {
         decode(*bytes, path, i);
+        shown.advance();
         done[size_t(i)] = 1;
         --left;
         progressed = true;

@@ -62,7 +62,8 @@ class PeerWatch {
 // unless finish() ran.
 class FileFarm {
  public:
-  FileFarm(std::string dir, int workers, uint64_t sceneHash, double timeout);
+  // `progress`: a progress line (or bar) per job, counting the workers that have answered.
+  FileFarm(std::string dir, int workers, uint64_t sceneHash, double timeout, bool progress = false);
   ~FileFarm();
   FileFarm(const FileFarm&) = delete;
   FileFarm& operator=(const FileFarm&) = delete;
@@ -83,13 +84,16 @@ class FileFarm {
   double waitSeconds() const { return waitSeconds_; }  // wall time spent waiting on the workers
 
  private:
+  // Waits for every worker's result file of `job` (or an error, or a worker gone quiet) and hands each to
+  // `decode` (bytes, path, worker); then deletes the job's files.
+  void collect(uint64_t job,
+               const std::function<void(const std::vector<char>&, const std::string&, int)>& decode);
+
   std::string dir_;
   int workers_;
   uint64_t sceneHash_;
   double timeout_;
-  void collect(uint64_t job,
-               const std::function<void(const std::vector<char>&, const std::string&, int)>& decode);
-
+  bool progress_;
   int jobs_ = 0;
   uint64_t items_ = 0, points_ = 0;
   double waitSeconds_ = 0.0;
