@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -16,6 +17,7 @@
 #include "tetraprobe/bake/bake.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/common/parallel.h"
+#include "tetraprobe/common/progress.h"
 #include "tracer_impl.h"
 
 namespace tetraprobe {
@@ -127,11 +129,22 @@ ReferenceIrradiance referenceIrradianceToError(const SceneTracer& tracer, const 
   return est.result();
 }
 
-void runReferenceBatch(const SceneTracer& tracer, ReferenceBatch& batch, int threads) {
+void traceReferences(const SceneTracer& tracer, ReferenceBatch& batch, int threads, const char* label) {
+  if (batch.options.farm && batch.options.farm->references) {
+    const size_t count = batch.items.size();
+    const TraceFarm& farm = *batch.options.farm;
+    batch.options.farm = nullptr;  // where it is traced, it is traced there
+    farm.references(batch);
+    if (batch.items.size() != count)
+      throw std::runtime_error("references: the trace farm returned another number of points");
+    return;
+  }
+  Progress progress(label, batch.items.size(), "points", batch.options.progress);
   parallelFor(batch.items.size(), threads, [&](size_t i) {
     ReferenceItem& item = batch.items[i];
     item.result =
         referenceIrradiance(tracer, item.position, item.normal, batch.samples, item.seed, batch.options);
+    progress.advance();
   });
 }
 

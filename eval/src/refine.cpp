@@ -7,12 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <stdexcept>
 
 #include <glm/geometric.hpp>
 
-#include "tetraprobe/common/parallel.h"
-#include "tetraprobe/common/progress.h"
 #include "tetraprobe/common/splitmix.h"
 #include "tetraprobe/occlusion/occlusion_holes.h"
 #include "tetraprobe/runtime/luminance.h"
@@ -29,37 +26,20 @@ constexpr double kFloor = 0.01;  // W/m^2, as eval
 std::vector<RefinePoint> refinePoints(const SceneTracer& tracer, const RefineOptions& options) {
   const std::vector<SurfacePoint> surface = sampleSurfacePoints(tracer, options.points, options.seed);
   std::vector<RefinePoint> out(surface.size());
-  BakeOptions bake;
-  bake.bounces = kUnboundedBounces;
-  bake.content = options.content;
-  bake.progress = false;
-  if (options.farm && options.farm->references) {
-    ReferenceBatch batch;
-    batch.options = bake;
-    batch.samples = options.samplesPerPoint;
-    batch.items.resize(surface.size());
-    for (size_t i = 0; i < surface.size(); ++i) {
-      batch.items[i].position = surface[i].position;
-      batch.items[i].normal = surface[i].normal;
-      batch.items[i].seed = splitmix64(options.seed ^ splitmix64(i));
-    }
-    options.farm->references(batch);
-    if (batch.items.size() != surface.size())
-      throw std::runtime_error("refine: the trace farm returned another number of points");
-    for (size_t i = 0; i < surface.size(); ++i) {
-      out[i].surface = surface[i];
-      out[i].reference = batch.items[i].result;
-    }
-    return out;
-  }
-  Progress progress("refine (oracle)", surface.size(), "points", options.progress);
-  parallelFor(surface.size(), options.threads, [&](size_t i) {
+  ReferenceBatch batch;
+  batch.options.bounces = kUnboundedBounces;
+  batch.options.content = options.content;
+  batch.options.progress = options.progress;
+  batch.options.farm = options.farm;
+  batch.samples = options.samplesPerPoint;
+  batch.items.resize(surface.size());
+  for (size_t i = 0; i < surface.size(); ++i)
+    batch.items[i] = {surface[i].position, surface[i].normal, splitmix64(options.seed ^ splitmix64(i)), {}};
+  traceReferences(tracer, batch, options.threads, "refine (oracle)");
+  for (size_t i = 0; i < surface.size(); ++i) {
     out[i].surface = surface[i];
-    out[i].reference =
-        referenceIrradiance(tracer, surface[i].position, surface[i].normal, options.samplesPerPoint,
-                            splitmix64(options.seed ^ splitmix64(i)), bake);
-    progress.advance();
-  });
+    out[i].reference = batch.items[i].result;
+  }
   return out;
 }
 

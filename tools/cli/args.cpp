@@ -79,6 +79,15 @@ double parseNumber(const std::string& text, const std::string& what) {
   return v;
 }
 
+IndexOfCount parseIndexOfCount(const std::string& text, const std::string& flag) {
+  const size_t slash = text.find('/');
+  const double i = slash == std::string::npos ? -1 : parseNumber(text.substr(0, slash), flag + " I");
+  const double n = slash == std::string::npos ? -1 : parseNumber(text.substr(slash + 1), flag + " N");
+  if (!(n >= 1 && n <= 65536 && i >= 0 && i < n && i == std::floor(i) && n == std::floor(n)))
+    throw UsageError(flag + " must be I/N with integers 0 <= I < N <= 65536, not '" + text + "'");
+  return {int(i), int(n)};
+}
+
 uint64_t parseU64(const std::string& text, const std::string& what) {
   constexpr uint64_t kMax = std::numeric_limits<uint64_t>::max();
   uint64_t v = 0;

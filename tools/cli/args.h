@@ -65,6 +65,13 @@ class Args {
 
 double parseNumber(const std::string& text, const std::string& what);
 
+// One of N: `text` as "I/N" with integers 0 <= I < N <= 65536 (a shard, a farm worker); anything else is a
+// UsageError naming `flag`.
+struct IndexOfCount {
+  int index = 0, count = 1;
+};
+IndexOfCount parseIndexOfCount(const std::string& text, const std::string& flag);
+
 // `text` as an unsigned 64-bit integer: decimal digits only (no sign, point, exponent or spaces), at most
 // 18446744073709551615; anything else is a UsageError naming `what`.
 uint64_t parseU64(const std::string& text, const std::string& what);

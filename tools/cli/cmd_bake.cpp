@@ -98,16 +98,11 @@ int runBake(int argc, char** argv, const MergedShards* merge) {
   ShardBake shardOut;
   if (args.has("--shard")) {
     if (merge) throw UsageError("--shard is not an option of merge");
-    const std::string spec = args.str("--shard");
-    const size_t slash = spec.find('/');
-    const double i = slash == std::string::npos ? -1 : parseNumber(spec.substr(0, slash), "--shard I");
-    const double n = slash == std::string::npos ? -1 : parseNumber(spec.substr(slash + 1), "--shard N");
-    if (!(n >= 1 && n <= 65536 && i >= 0 && i < n && i == std::floor(i) && n == std::floor(n)))
-      throw UsageError("--shard must be I/N with integers 0 <= I < N <= 65536, not '" + spec + "'");
+    const IndexOfCount shard = parseIndexOfCount(args.str("--shard"), "--shard");
     if (!(opt.bake.targetRelError > 0.0)) throw UsageError("--shard needs adaptive sampling (--noise > 0)");
     if (!opt.importShCsv.empty()) throw UsageError("--shard does not take --import-sh (nothing is traced)");
-    opt.shardIndex = int(i);
-    opt.shardCount = int(n);
+    opt.shardIndex = shard.index;
+    opt.shardCount = shard.count;
     opt.shardOut = &shardOut;
   }
   // The two-round protocol (docs/distributed.md): round 1 writes pass-1 states, `merge --floor` the floor,

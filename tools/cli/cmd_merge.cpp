@@ -62,12 +62,13 @@ int cmdMerge(int argc, char** argv) {
   const ShardPart& first = parts[0];
   MergedShards merged;
   if (args.has("--farm")) {
-    const double workers = args.number("--workers"), timeout = args.number("--farm-timeout");
-    if (!(workers >= 1 && workers <= 65536 && workers == double(int(workers))))
+    const int workers = args.integer("--workers");
+    const double timeout = args.number("--farm-timeout");
+    if (workers < 1 || workers > 65536)
       throw UsageError("--farm needs --workers N, an integer from 1 to 65536");
     if (!(timeout > 0.0)) throw UsageError("--farm-timeout must be > 0");
     merged.farmDir = args.str("--farm");
-    merged.farmWorkers = int(workers);
+    merged.farmWorkers = workers;
     merged.farmTimeout = timeout;
   } else if (args.has("--workers")) {
     throw UsageError("--workers needs --farm DIR");

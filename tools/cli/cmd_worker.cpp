@@ -29,21 +29,16 @@ int cmdWorker(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   args.requirePositional(1, 1);
   if (!args.has("--farm")) throw UsageError("missing --farm DIR");
-  const std::string spec = args.str("--index");
-  const size_t slash = spec.find('/');
-  const double i = slash == std::string::npos ? -1 : parseNumber(spec.substr(0, slash), "--index I");
-  const double n = slash == std::string::npos ? -1 : parseNumber(spec.substr(slash + 1), "--index N");
-  if (!(n >= 1 && n <= 65536 && i >= 0 && i < n && i == double(int(i)) && n == double(int(n))))
-    throw UsageError("--index must be I/N with integers 0 <= I < N <= 65536, not '" + spec + "'");
+  const IndexOfCount worker = parseIndexOfCount(args.str("--index"), "--index");
   const double timeout = args.number("--farm-timeout");
   if (!(timeout > 0.0)) throw UsageError("--farm-timeout must be > 0");
-  const int threads = int(args.number("--threads"));
+  const int threads = args.integer("--threads");
   const std::string scenePath = args.positional()[0];
   const Scene scene = loadScene(scenePath);
   const SceneTracer tracer(scene);
-  const int jobs = runFarmWorker(tracer, sceneContentHash(scene), args.str("--farm"), int(i), int(n), threads,
-                                 timeout, Progress::enabled());
-  std::printf("tetraprobe worker %d/%d: traced its share of %d jobs\n", int(i), int(n), jobs);
+  const int jobs = runFarmWorker(tracer, sceneContentHash(scene), args.str("--farm"), worker.index,
+                                 worker.count, threads, timeout, Progress::enabled());
+  std::printf("tetraprobe worker %d/%d: traced its share of %d jobs\n", worker.index, worker.count, jobs);
   return 0;
 }
 

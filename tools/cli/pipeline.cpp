@@ -864,18 +864,15 @@ Level buildLevel(const Scene& scene, const PipelineOptions& given, PipelineStats
     // sees their answer. A point is one when closedTestPaths() reference paths (eval's default count) find
     // no light at all.
     ReferenceBatch paths;
-    paths.options = options.bake;
-    paths.options.farm = nullptr;
+    paths.options = options.bake;    // its farm, if any, traces them
+    paths.options.progress = false;  // within the check's stage
     paths.samples = closedTestPaths();
     for (size_t i = 0; i < left.lookupFallbacks.size(); ++i)
       paths.items.push_back({left.lookupFallbacks[i].position,
                              left.lookupFallbacks[i].normal,
                              options.bake.seed ^ (0xc105edull + i),
                              {}});
-    if (options.bake.farm && options.bake.farm->references)
-      options.bake.farm->references(paths);
-    else
-      runReferenceBatch(tracer, paths, options.bake.threads);
+    traceReferences(tracer, paths, options.bake.threads);
     std::vector<uint8_t> closed(paths.items.size(), 0);
     for (size_t i = 0; i < paths.items.size(); ++i) closed[i] = noPathLeaves(paths.items[i].result) ? 1 : 0;
     stats.finalClosedFallbacks = size_t(std::count(closed.begin(), closed.end(), uint8_t(1)));

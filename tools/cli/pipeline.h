@@ -177,8 +177,8 @@ struct PipelineStats {
   size_t holeProbes = 0;
   size_t finalChecked = 0, finalHoles = 0;  // the finished level's (0, 0: no occlusion data)
   size_t finalLookupFallbacks = 0;          // of finalChecked, those whose run-time answer falls back
-  size_t finalClosedFallbacks =
-      0;  // of those, points no path leaves (closedTestPaths() paths found no light)
+  // Of those, points no path leaves (closedTestPaths() paths found no light).
+  size_t finalClosedFallbacks = 0;
   // Error-driven refinement: probes added, and the error at an independent draw of points before and after.
   size_t refineProbes = 0;
   ErrorEstimate refineBefore, refineAfter;

@@ -2,14 +2,11 @@
 // so they do not depend on the compiler; the checksum is FNV-1a 64 (Fowler, Noll, Vo).
 #include "shard_part.h"
 
-#include "state_io.h"
-
-#include <bit>
 #include <climits>
 #include <cstring>
-#include <string_view>
 #include <vector>
 
+#include "state_io.h"
 #include "tetraprobe/common/error.h"
 #include "tetraprobe/runtime/file_io.h"
 

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -35,14 +36,16 @@ void writeAtomic(const std::string& path, const std::string& bytes) {
   if (!writeFileAtomic(path, bytes, &error)) throw std::runtime_error(error);
 }
 
-// The file's bytes, or nullopt when it does not exist (or vanished while read).
+// The file's bytes, or nullopt when it is not there (or went between the look and the read). A file that is
+// there and cannot be read is an error, not a wait: farm files are ours, of any size (no read limit).
 std::optional<std::vector<char>> readIfThere(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
   std::vector<char> bytes;
   std::string error;
-  if (!readFile(path, bytes, &error)) return std::nullopt;
-  return bytes;
+  if (readFile(path, bytes, &error, std::numeric_limits<uint64_t>::max())) return bytes;
+  if (!fs::exists(path, ec)) return std::nullopt;
+  throw std::runtime_error(error);
 }
 
 std::string jobPath(const std::string& dir, uint64_t job) {
@@ -418,7 +421,7 @@ int runFarmWorker(const SceneTracer& tracer, uint64_t sceneHash, const std::stri
           ReferenceBatch batch = decodeFarmPointJob(*bytes, path, stored, hash);
           checkJob(stored, hash);
           runShare(batch, index, count,
-                   [&](ReferenceBatch& mine) { runReferenceBatch(tracer, mine, threads); });
+                   [&](ReferenceBatch& mine) { traceReferences(tracer, mine, threads); });
           writeAtomic(resultPath(dir, job, index, ".result"),
                       encodeFarmPointResult(job, index, count, batch));
         } else {

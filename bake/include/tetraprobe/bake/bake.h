@@ -27,7 +27,7 @@ inline constexpr int kUnboundedBounces = 1 << 20;
 enum class LitPatches { kOff, kProbe, kBounces };
 
 // A trace farm (BakeOptions::farm; the batches are declared with TraceRunner below): tracing done elsewhere,
-// each batch in place, exactly as this process would (TraceRunner::run, runReferenceBatch). An empty
+// each batch in place, exactly as this process would (TraceRunner::run, traceReferences). An empty
 // function: that kind of work stays here.
 struct TraceBatch;
 struct ReferenceBatch;
@@ -340,14 +340,16 @@ struct ReferenceItem {
 };
 
 struct ReferenceBatch {
-  BakeOptions options;  // bounces and content are what the reference reads
+  BakeOptions options;  // bounces and content are what the reference reads; farm and progress as above
   int32_t samples = 0;  // paths a point
   std::vector<ReferenceItem> items;
 };
 
-// Fills every item's result (parallel over items; `threads` 0 = all cores, never changes the result). Throws
-// InputError as referenceIrradiance does.
-void runReferenceBatch(const SceneTracer& tracer, ReferenceBatch& batch, int threads);
+// Fills every item's result: on batch.options.farm when it takes reference points (BakeOptions::farm), else
+// here, parallel over items (`threads` 0 = all cores, never changes the result; with options.progress, a
+// progress line named `label`). Throws InputError as referenceIrradiance does.
+void traceReferences(const SceneTracer& tracer, ReferenceBatch& batch, int threads,
+                     const char* label = "references");
 
 struct SurfacePoint {
   glm::dvec3 position{0.0};

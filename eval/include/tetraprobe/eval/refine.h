@@ -27,8 +27,8 @@ struct RefineOptions {
   uint64_t seed = 0x2ef1eull;
   int threads = 0;
   bool progress = false;  // progress over the points' references (common/progress.h)
-  // When set (and its `references`), the points' references are traced there as one ReferenceBatch (the
-  // same results: each point's seed travels with it). Not owned.
+  // When set (and its `references`), the points' references are traced there as one ReferenceBatch
+  // (traceReferences: the same results, each point's seed travels with it). Not owned.
   const TraceFarm* farm = nullptr;
 };
 
